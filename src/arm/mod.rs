@@ -1,0 +1,21 @@
+//! The planar n-R arm: parameters, kinematics, rigid-body dynamics, friction, a fixed-step
+//! integrator with stick–slip, and hardware-like measurement effects.
+//!
+//! Plain functions over plain data: nothing here knows about FMI, files or the command line.
+
+pub mod dynamics;
+pub mod friction;
+pub mod hardware;
+pub mod integrator;
+pub mod kinematics;
+pub mod params;
+
+pub use dynamics::{
+    coriolis_centrifugal, coriolis_matrix, gravity_torques, inverse_dynamics, inverse_dynamics_rnea,
+    kinetic_energy, mass_matrix, potential_energy, ArmWorkspace,
+};
+pub use friction::{FrictionBranch, JointFriction};
+pub use hardware::{HardwareEffects, Sensors};
+pub use integrator::{ArmSimulator, ArmState, IntegratorSettings, StepError};
+pub use kinematics::{end_effector_position, end_effector_velocity, jacobian, jacobian_dot_qd};
+pub use params::{ArmParams, LinkParams, ParamError};

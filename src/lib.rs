@@ -1,0 +1,9 @@
+//! neurarm: learn robot-joint dynamics with neural networks and ship them as FMI 2.0 components.
+//!
+//! The crate implements Petrič & Žlajpah, *Application of neural networks for dynamic modeling
+//! of robotic mechanisms*: a planar n-R arm ([`arm`]), and (in later modules) the networks that
+//! learn its friction and gravity, the FMUs that carry both, and the closed loops that use them.
+
+#![warn(missing_docs)]
+
+pub mod arm;
