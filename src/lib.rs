@@ -7,3 +7,8 @@
 #![warn(missing_docs)]
 
 pub mod arm;
+pub mod config;
+#[cfg(feature = "app")]
+pub mod simulate;
+#[cfg(feature = "app")]
+pub mod table;

@@ -1,1 +1,88 @@
-fn main(){}
+//! The `neurarm` command line: a thin shell over the library.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use neurarm::arm::ArmState;
+use neurarm::config::ArmConfig;
+use neurarm::simulate::{simulate, TorqueInput};
+use neurarm::table::write_atomic;
+
+#[derive(Parser)]
+#[command(name = "neurarm", version, about = "Learn robot-joint dynamics with neural networks and ship them as FMI 2.0 components")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate the arm from an initial state under a torque table and write its trajectory.
+    ///
+    /// The torque CSV has a header with `time` [s, strictly increasing] and `tau_1` … `tau_n`
+    /// [N·m]; each row's torque is held until the next row. The output has one row per input
+    /// time: time, q_i [rad], qd_i [rad/s], x, y [m], xd, yd [m/s], tau_i, and q_meas_i,
+    /// qd_meas_i when the configuration adds hardware-like effects.
+    Simulate {
+        /// Torque input CSV.
+        #[arg(long, short = 't')]
+        torque: PathBuf,
+        /// Arm configuration (TOML); the default 4-link arm if omitted.
+        #[arg(long, short = 'c')]
+        config: Option<PathBuf>,
+        /// Initial joint angles [rad], comma-separated (default: all 0).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        q0: Option<Vec<f64>>,
+        /// Initial joint velocities [rad/s], comma-separated (default: all 0).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        qd0: Option<Vec<f64>>,
+        /// Output trajectory CSV; written only if the whole simulation succeeds.
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
+    /// Print the default arm configuration as TOML, a starting point for your own arm.
+    DefaultConfig,
+}
+
+fn initial_vector(name: &str, given: Option<Vec<f64>>, n: usize) -> Result<Vec<f64>> {
+    let v = given.unwrap_or_else(|| vec![0.0; n]);
+    if v.len() != n {
+        bail!("--{name} has {} values, the arm has {n} joints", v.len());
+    }
+    if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        bail!("--{name}: value {} ({x}) is not a finite number", i + 1);
+    }
+    Ok(v)
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Simulate { torque, config, q0, qd0, output } => {
+            let config = match config {
+                Some(path) => ArmConfig::from_toml_file(&path)?,
+                None => ArmConfig::default(),
+            };
+            let n = config.arm.dof();
+            let initial = ArmState { q: initial_vector("q0", q0, n)?, qd: initial_vector("qd0", qd0, n)? };
+            let input = TorqueInput::read_csv(&torque, n)?;
+            let trajectory = simulate(&config, &initial, &input)?;
+            write_atomic(&output, &trajectory.names, trajectory.rows.into_iter())
+                .with_context(|| format!("writing {}", output.display()))?;
+            eprintln!("wrote {} rows to {}", input.time.len(), output.display());
+        }
+        Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

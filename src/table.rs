@@ -1,0 +1,181 @@
+//! Numeric CSV tables with a header row: strict reading (every error names the file, line and
+//! column) and atomic writing (a file appears whole or not at all).
+
+use std::fmt;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// A CSV file's problem, with where it is. Lines and columns count from 1.
+#[derive(Debug, thiserror::Error)]
+pub struct TableError {
+    /// The file.
+    pub path: PathBuf,
+    /// Line in the file, if the problem has one.
+    pub line: Option<u64>,
+    /// Column number and name, if the problem has one.
+    pub column: Option<(usize, String)>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for TableError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, ", line {line}")?;
+        }
+        if let Some((number, name)) = &self.column {
+            write!(f, ", column {number} ({name})")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+/// A table of finite numbers read from CSV, column-major by name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NumericTable {
+    /// Column names, as in the header.
+    pub names: Vec<String>,
+    /// One vector per column, in header order.
+    pub columns: Vec<Vec<f64>>,
+    /// File line of each row (for later messages about a row).
+    pub lines: Vec<u64>,
+    /// The file read.
+    pub path: PathBuf,
+}
+
+impl NumericTable {
+    /// Reads `path`, requiring every column in `required` to be present; every cell must be a
+    /// finite number. Extra columns are read too.
+    pub fn read(path: &Path, required: &[&str]) -> Result<Self, TableError> {
+        let err = |line: Option<u64>, column: Option<(usize, String)>, message: String| TableError {
+            path: path.to_path_buf(),
+            line,
+            column,
+            message,
+        };
+        let mut reader = csv::ReaderBuilder::new()
+            .trim(csv::Trim::All)
+            .from_path(path)
+            .map_err(|e| err(None, None, format!("cannot open: {}", csv_cause(&e))))?;
+        let names: Vec<String> = reader
+            .headers()
+            .map_err(|e| err(Some(1), None, format!("cannot read the header: {}", csv_cause(&e))))?
+            .iter()
+            .map(str::to_owned)
+            .collect();
+        if names.iter().all(|n| n.is_empty()) {
+            return Err(err(Some(1), None, "the file is empty; a header row is needed".into()));
+        }
+        for want in required {
+            if !names.iter().any(|n| n == want) {
+                return Err(err(
+                    Some(1),
+                    None,
+                    format!("missing column '{want}' (the header has: {})", names.join(", ")),
+                ));
+            }
+        }
+        for (i, name) in names.iter().enumerate() {
+            if names[..i].contains(name) {
+                return Err(err(Some(1), Some((i + 1, name.clone())), "column name repeated".into()));
+            }
+        }
+        let mut columns = vec![Vec::new(); names.len()];
+        let mut lines = Vec::new();
+        for record in reader.records() {
+            let record = record.map_err(|e| {
+                let line = e.position().map(|p| p.line());
+                err(line, None, csv_cause(&e))
+            })?;
+            let line = record.position().map_or(0, |p| p.line());
+            for (c, cell) in record.iter().enumerate() {
+                let at = || Some((c + 1, names[c].clone()));
+                let value: f64 = cell
+                    .parse()
+                    .map_err(|_| err(Some(line), at(), format!("'{cell}' is not a number")))?;
+                if !value.is_finite() {
+                    return Err(err(Some(line), at(), format!("{cell} is not a finite number")));
+                }
+                columns[c].push(value);
+            }
+            lines.push(line);
+        }
+        if lines.is_empty() {
+            return Err(err(None, None, "no data rows after the header".into()));
+        }
+        Ok(Self { names, columns, lines, path: path.to_path_buf() })
+    }
+
+    /// The column called `name`, if present.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.names.iter().position(|n| n == name).map(|i| &self.columns[i][..])
+    }
+
+    /// Number of data rows.
+    pub fn rows(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// Checks that column `name` strictly increases, naming the first row where it does not.
+    pub fn require_increasing(&self, name: &str) -> Result<(), TableError> {
+        let index = self.names.iter().position(|n| n == name).expect("column checked on read");
+        let col = &self.columns[index];
+        for r in 1..col.len() {
+            if col[r] <= col[r - 1] {
+                return Err(TableError {
+                    path: self.path.clone(),
+                    line: Some(self.lines[r]),
+                    column: Some((index + 1, name.to_owned())),
+                    message: format!(
+                        "{name} must increase from row to row, but {} follows {}",
+                        col[r],
+                        col[r - 1]
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+fn csv_cause(e: &csv::Error) -> String {
+    match e.kind() {
+        csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+            format!("{len} fields where the header has {expected_len}")
+        }
+        csv::ErrorKind::Io(io) => io.to_string(),
+        csv::ErrorKind::Utf8 { .. } => "not valid UTF-8 text".into(),
+        _ => e.to_string(),
+    }
+}
+
+/// Writes a numeric table to `path` atomically: the rows go to a temporary file beside it,
+/// which is renamed over `path` only once complete, so a failure leaves no partial file.
+/// Numbers are written in Rust's shortest round-trip form, so reading gives the same bits.
+pub fn write_atomic(path: &Path, names: &[String], rows: impl Iterator<Item = Vec<f64>>) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::Builder::new().prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
+    {
+        let mut out = std::io::BufWriter::new(tmp.as_file_mut());
+        writeln!(out, "{}", names.join(","))?;
+        let mut line = String::new();
+        for row in rows {
+            line.clear();
+            for (i, v) in row.iter().enumerate() {
+                if i > 0 {
+                    line.push(',');
+                }
+                line.push_str(&v.to_string());
+            }
+            writeln!(out, "{line}")?;
+        }
+        out.flush()?;
+    }
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}

@@ -1,0 +1,149 @@
+//! `neurarm simulate` end to end: good input gives the library's trajectory to the bit; bad
+//! input gives an error naming file, line and column, and leaves no output file behind.
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use neurarm::arm::ArmState;
+use neurarm::config::ArmConfig;
+use neurarm::simulate::{simulate, TorqueInput};
+use neurarm::table::NumericTable;
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn good_csv() -> String {
+    let mut s = String::from("time,tau_1,tau_2,tau_3,tau_4\n");
+    for k in 0..=200 {
+        let t = k as f64 * 1e-3;
+        s += &format!("{t},{},{},{},0.4\n", 3.0 * (5.0 * t).sin(), -2.0, 1.0);
+    }
+    s
+}
+
+fn neurarm() -> Command {
+    Command::cargo_bin("neurarm").unwrap()
+}
+
+/// Runs simulate on `csv` and returns stderr, asserting failure and that no output appeared.
+fn fails_with(csv: &str, expected: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "tau.csv", csv);
+    let out = dir.path().join("traj.csv");
+    let assert = neurarm().args(["simulate", "-t"]).arg(&input).arg("-o").arg(&out).assert().failure();
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    for e in expected {
+        assert!(stderr.contains(e), "stderr {stderr:?} lacks {e:?}");
+    }
+    assert!(stderr.contains("tau.csv"), "the file is not named: {stderr}");
+    assert!(!out.exists(), "output file left behind");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(leftovers.len(), 1, "stray files: {leftovers:?}");
+}
+
+#[test]
+fn simulate_writes_the_library_trajectory_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "tau.csv", &good_csv());
+    let out = dir.path().join("traj.csv");
+    neurarm()
+        .args(["simulate", "-t"])
+        .arg(&input)
+        .args(["--q0", "0.1,-0.2,0.3,0.4", "--qd0", "0,1,0,-1", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+    let written = NumericTable::read(&out, &["time", "q_1", "qd_4", "x", "y", "tau_1"]).unwrap();
+    let config = ArmConfig::default();
+    let initial = ArmState { q: vec![0.1, -0.2, 0.3, 0.4], qd: vec![0.0, 1.0, 0.0, -1.0] };
+    let want = simulate(&config, &initial, &TorqueInput::read_csv(&input, 4).unwrap()).unwrap();
+    assert_eq!(written.names, want.names);
+    assert_eq!(written.rows(), 201);
+    for (r, row) in want.rows.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
+            assert_eq!(written.columns[c][r].to_bits(), v.to_bits(), "row {r} column {}", want.names[c]);
+        }
+    }
+    assert_eq!(written.column("q_1").unwrap()[0], 0.1);
+    assert_ne!(written.column("q_1").unwrap()[200], 0.1);
+}
+
+#[test]
+fn missing_column_is_named() {
+    fails_with("time,tau_1,tau_2,tau_4\n0,1,1,1\n", &["line 1", "missing column 'tau_3'"]);
+}
+
+#[test]
+fn text_in_a_number_is_located() {
+    fails_with(
+        "time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.001,1,abc,1,1\n",
+        &["line 3", "column 3 (tau_2)", "'abc' is not a number"],
+    );
+}
+
+#[test]
+fn nan_is_located() {
+    fails_with(
+        "time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.001,1,1,1,1\n0.002,1,1,NaN,1\n",
+        &["line 4", "column 4 (tau_3)", "not a finite number"],
+    );
+}
+
+#[test]
+fn non_monotonic_time_is_located() {
+    fails_with(
+        "time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.002,1,1,1,1\n0.001,1,1,1,1\n",
+        &["line 4", "column 1 (time)", "must increase"],
+    );
+    fails_with("time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0,1,1,1,1\n", &["line 3", "column 1 (time)"]);
+}
+
+#[test]
+fn ragged_row_and_empty_file_are_reported() {
+    fails_with("time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.001,1,1\n", &["line 3", "3 fields where the header has 5"]);
+    fails_with("time,tau_1,tau_2,tau_3,tau_4\n", &["no data rows"]);
+    fails_with("", &["empty"]);
+}
+
+#[test]
+fn failed_run_keeps_an_existing_output_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "tau.csv", "time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,x\n");
+    let out = write(dir.path(), "traj.csv", "precious\n");
+    neurarm().args(["simulate", "-t"]).arg(&input).arg("-o").arg(&out).assert().failure();
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "precious\n");
+}
+
+#[test]
+fn bad_config_and_initial_state_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "tau.csv", &good_csv());
+    let out = dir.path().join("traj.csv");
+    let bad = ArmConfig::default().to_toml_string().replacen("length_m = 0.25", "length_m = 0.0", 1);
+    let config = write(dir.path(), "arm.toml", &bad);
+    let a = neurarm().args(["simulate", "-t"]).arg(&input).arg("-c").arg(&config).arg("-o").arg(&out).assert().failure();
+    let stderr = String::from_utf8_lossy(&a.get_output().stderr).to_string();
+    assert!(stderr.contains("arm.toml") && stderr.contains("links[0].length_m"), "{stderr}");
+    let a = neurarm().args(["simulate", "-t"]).arg(&input).args(["--q0", "1,2", "-o"]).arg(&out).assert().failure();
+    let stderr = String::from_utf8_lossy(&a.get_output().stderr).to_string();
+    assert!(stderr.contains("--q0 has 2 values, the arm has 4 joints"), "{stderr}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn three_joint_config_simulates() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut config = ArmConfig::default();
+    config.arm.links.truncate(3);
+    config.arm.friction.truncate(3);
+    let cfg = write(dir.path(), "arm3.toml", &config.to_toml_string());
+    let input = write(dir.path(), "tau.csv", "time,tau_1,tau_2,tau_3\n0,2,0,0\n0.5,0,0,0\n1,0,0,0\n");
+    let out = dir.path().join("traj.csv");
+    neurarm().args(["simulate", "-t"]).arg(&input).arg("-c").arg(&cfg).arg("-o").arg(&out).assert().success();
+    let t = NumericTable::read(&out, &["q_3", "qd_3"]).unwrap();
+    assert!(t.column("q_4").is_none());
+    assert!(t.column("q_1").unwrap()[2] > 0.0);
+}
