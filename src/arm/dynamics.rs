@@ -209,7 +209,9 @@ impl ArmWorkspace {
         self.n
     }
 
-    fn set_angles(&mut self, q: &[f64]) {
+    /// Computes the sines and cosines of the absolute angles of `q`, which the `*_at_angles`
+    /// functions read.
+    pub(crate) fn set_angles(&mut self, q: &[f64]) {
         let mut theta = 0.0;
         for i in 0..self.n {
             theta += q[i];
@@ -220,10 +222,10 @@ impl ArmWorkspace {
     }
 }
 
-/// Mass matrix into `h` (row-major n×n) as `Σᵢ mᵢ J_cᵢᵀ J_cᵢ + Iᵢ aᵢ aᵢᵀ`, without allocating.
-pub(crate) fn mass_matrix_into(params: &ArmParams, q: &[f64], ws: &mut ArmWorkspace, h: &mut [f64]) {
+/// Mass matrix into `h` (row-major n×n) as `Σᵢ mᵢ J_cᵢᵀ J_cᵢ + Iᵢ aᵢ aᵢᵀ`, without allocating,
+/// at the angles last given to [`ArmWorkspace::set_angles`].
+pub(crate) fn mass_matrix_at_angles(params: &ArmParams, ws: &mut ArmWorkspace, h: &mut [f64]) {
     let n = ws.n;
-    ws.set_angles(q);
     // Centre-of-mass Jacobian columns of link i, built from the centre of mass inwards.
     for i in 0..n {
         let c = params.links[i].com_m;
@@ -262,8 +264,20 @@ pub(crate) fn rnea_into(
     ws: &mut ArmWorkspace,
     tau: &mut [f64],
 ) {
-    let n = ws.n;
     ws.set_angles(q);
+    rnea_at_angles(params, qd, qdd, gravity, ws, tau);
+}
+
+/// [`rnea_into`] at the angles last given to [`ArmWorkspace::set_angles`].
+pub(crate) fn rnea_at_angles(
+    params: &ArmParams,
+    qd: &[f64],
+    qdd: Option<&[f64]>,
+    gravity: f64,
+    ws: &mut ArmWorkspace,
+    tau: &mut [f64],
+) {
+    let n = ws.n;
     // Outward pass. Gravity is an upward acceleration of the base.
     let mut joint_acc = [0.0, gravity];
     let (mut omega, mut alpha) = (0.0, 0.0);

@@ -24,7 +24,7 @@
 //! error of at most one sub-step; away from them the scheme is plain fourth-order RK4. A joint
 //! driven below its breakaway torque from rest stays bit-for-bit at rest.
 
-use super::dynamics::{mass_matrix_into, rnea_into, ArmWorkspace};
+use super::dynamics::{mass_matrix_at_angles, rnea_at_angles, ArmWorkspace};
 use super::params::{ArmParams, ParamError};
 
 /// Settings of the fixed-step integrator.
@@ -291,8 +291,9 @@ impl ArmSimulator {
     fn evaluate(&mut self, k: usize) {
         let n = self.dof();
         let p = &self.params;
-        mass_matrix_into(p, &self.q_stage, &mut self.ws, &mut self.mass);
-        rnea_into(p, &self.q_stage, &self.qd_stage, None, p.in_plane_gravity(), &mut self.ws, &mut self.bias);
+        self.ws.set_angles(&self.q_stage);
+        mass_matrix_at_angles(p, &mut self.ws, &mut self.mass);
+        rnea_at_angles(p, &self.qd_stage, None, p.in_plane_gravity(), &mut self.ws, &mut self.bias);
         self.free.clear();
         for i in 0..n {
             let friction = match self.modes[i] {
