@@ -16,11 +16,15 @@ fn vec_of(v: &serde_json::Value) -> Vec<f64> {
     v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
 }
 
-fn assert_close(what: &str, got: &[f64], want: &[f64], tol: f64) {
+/// Asserts |got − want| <= tol entrywise; returns the largest difference.
+fn assert_close(what: &str, got: &[f64], want: &[f64], tol: f64) -> f64 {
     assert_eq!(got.len(), want.len(), "{what}: length");
+    let mut worst: f64 = 0.0;
     for (i, (g, w)) in got.iter().zip(want).enumerate() {
         assert!((g - w).abs() <= tol, "{what}[{i}]: got {g}, want {w} (diff {:e})", (g - w).abs());
+        worst = worst.max((g - w).abs());
     }
+    worst
 }
 
 /// The reference arm: default geometry and masses, base turned 90°, no friction.
@@ -47,24 +51,26 @@ fn matches_pinocchio_reference_values() {
     let arm = reference_arm(&r["params"]);
     let cases = r["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 8);
+    let mut worst: f64 = 0.0;
     for (c, case) in cases.iter().enumerate() {
         let (q, qd, qdd) = (vec_of(&case["q"]), vec_of(&case["qd"]), vec_of(&case["qdd"]));
         let h = mass_matrix(&arm, &q);
         let h_ref: Vec<f64> = case["mass_matrix"].as_array().unwrap().iter().flat_map(vec_of).collect();
         let h_rows: Vec<f64> = (0..4).flat_map(|i| (0..4).map(move |j| (i, j))).map(|(i, j)| h[(i, j)]).collect();
-        assert_close(&format!("case {c} H"), &h_rows, &h_ref, 1e-9);
+        worst = worst.max(assert_close(&format!("case {c} H"), &h_rows, &h_ref, 1e-9));
         let tol = 1e-9;
-        assert_close(&format!("case {c} C·qd"), coriolis_centrifugal(&arm, &q, &qd).as_slice(), &vec_of(&case["coriolis_centrifugal"]), tol);
-        assert_close(&format!("case {c} g"), gravity_torques(&arm, &q).as_slice(), &vec_of(&case["gravity"]), tol);
+        worst = worst.max(assert_close(&format!("case {c} C·qd"), coriolis_centrifugal(&arm, &q, &qd).as_slice(), &vec_of(&case["coriolis_centrifugal"]), tol));
+        worst = worst.max(assert_close(&format!("case {c} g"), gravity_torques(&arm, &q).as_slice(), &vec_of(&case["gravity"]), tol));
         let id_ref = vec_of(&case["inverse_dynamics"]);
-        assert_close(&format!("case {c} ID"), inverse_dynamics(&arm, &q, &qd, &qdd).as_slice(), &id_ref, tol);
-        assert_close(&format!("case {c} RNEA"), inverse_dynamics_rnea(&arm, &q, &qd, &qdd).as_slice(), &id_ref, tol);
-        assert_close(&format!("case {c} x"), end_effector_position(&arm, &q).as_slice(), &vec_of(&case["end_effector"]), tol);
+        worst = worst.max(assert_close(&format!("case {c} ID"), inverse_dynamics(&arm, &q, &qd, &qdd).as_slice(), &id_ref, tol));
+        worst = worst.max(assert_close(&format!("case {c} RNEA"), inverse_dynamics_rnea(&arm, &q, &qd, &qdd).as_slice(), &id_ref, tol));
+        worst = worst.max(assert_close(&format!("case {c} x"), end_effector_position(&arm, &q).as_slice(), &vec_of(&case["end_effector"]), tol));
         let jac = jacobian(&arm, &q);
         let jac_ref: Vec<f64> = case["jacobian"].as_array().unwrap().iter().flat_map(vec_of).collect();
         let jac_rows: Vec<f64> = (0..2).flat_map(|i| (0..4).map(move |j| (i, j))).map(|(i, j)| jac[(i, j)]).collect();
-        assert_close(&format!("case {c} J"), &jac_rows, &jac_ref, tol);
+        worst = worst.max(assert_close(&format!("case {c} J"), &jac_rows, &jac_ref, tol));
     }
+    eprintln!("largest difference from Pinocchio over all quantities and cases: {worst:e}");
 }
 
 fn random_arm(rng: &mut ChaCha8Rng, n: usize) -> ArmParams {

@@ -217,8 +217,12 @@ impl ArmSimulator {
         Ok(())
     }
 
-    /// Joint accelerations [rad/s²] at `state` under `tau`, with stick–slip decided as at the
-    /// start of a sub-step (a joint at rest within its breakaway torque gets 0).
+    /// Joint accelerations [rad/s²] at `state` under `tau` [N·m] (not saturated), with
+    /// stick–slip decided as at the start of a sub-step (a joint at rest within its breakaway
+    /// torque gets 0).
+    ///
+    /// # Panics
+    /// If `tau`, `state.q` or `state.qd` does not have one entry per joint.
     pub fn forward_dynamics(&mut self, state: &ArmState, tau: &[f64]) -> Vec<f64> {
         self.tau.copy_from_slice(tau);
         self.q_stage.copy_from_slice(&state.q);
