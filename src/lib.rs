@@ -8,6 +8,8 @@
 
 pub mod arm;
 pub mod config;
+pub mod fmi2;
+pub mod models;
 #[cfg(feature = "app")]
 pub mod simulate;
 #[cfg(feature = "app")]

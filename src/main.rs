@@ -7,6 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use neurarm::arm::ArmState;
 use neurarm::config::ArmConfig;
+use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
 use neurarm::simulate::{simulate, TorqueInput};
 use neurarm::table::write_atomic;
 
@@ -44,6 +45,32 @@ enum Command {
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig,
+    /// Build an FMI 2.0 Co-Simulation FMU.
+    #[command(subcommand)]
+    Export(Export),
+}
+
+#[derive(Subcommand)]
+enum Export {
+    /// The arm as an FMU (`PlanarArm`): torque inputs; angle, velocity and end-effector outputs;
+    /// every parameter of the configuration as an FMU parameter.
+    Arm {
+        /// Arm configuration (TOML); the default 4-link arm if omitted.
+        #[arg(long, short = 'c')]
+        config: Option<PathBuf>,
+        /// Model identifier (default: the output file's name, e.g. MyArm for MyArm.fmu).
+        #[arg(long)]
+        name: Option<String>,
+        /// Initial joint angles [rad], comma-separated (default: all 0); FMU parameters q0_i.
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        q0: Option<Vec<f64>>,
+        /// Initial joint velocities [rad/s], comma-separated (default: all 0); parameters qd0_i.
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        qd0: Option<Vec<f64>>,
+        /// Output .fmu file.
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
 }
 
 fn initial_vector(name: &str, given: Option<Vec<f64>>, n: usize) -> Result<Vec<f64>> {
@@ -73,6 +100,23 @@ fn run(cli: Cli) -> Result<()> {
             eprintln!("wrote {} rows to {}", input.time.len(), output.display());
         }
         Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
+        Command::Export(Export::Arm { config, name, q0, qd0, output }) => {
+            let config = match config {
+                Some(path) => ArmConfig::from_toml_file(&path)?,
+                None => ArmConfig::default(),
+            };
+            let n = config.arm.dof();
+            let identifier = match name {
+                Some(n) => n,
+                None => output.file_stem().and_then(|s| s.to_str()).unwrap_or("PlanarArm").to_owned(),
+            };
+            let spec = FmuSpec {
+                identifier,
+                model: ModelSpec::PlanarArm { config, q0: initial_vector("q0", q0, n)?, qd0: initial_vector("qd0", qd0, n)? },
+            };
+            export_fmu(&spec, &output).map_err(anyhow::Error::msg)?;
+            eprintln!("wrote {} ({}, {n} joints)", output.display(), spec.identifier);
+        }
     }
     Ok(())
 }

@@ -16,13 +16,14 @@ use super::params::{check, ParamError};
 #[serde(deny_unknown_fields, default)]
 pub struct HardwareEffects {
     /// Encoder resolution per joint [counts per revolution]; measured angles are rounded to a
-    /// whole count. `None`: exact angles.
+    /// whole count. `None`, or 0 for a joint: exact angles.
     pub encoder_counts_per_rev: Option<Vec<f64>>,
     /// Standard deviation of the white Gaussian noise added to each measured angle [rad].
     pub q_noise_std_rad: f64,
     /// Standard deviation of the white Gaussian noise added to each measured velocity [rad/s].
     pub qd_noise_std_rad_s: f64,
-    /// Largest torque each motor can apply [N·m]; commands beyond it are clipped. `None`: no limit.
+    /// Largest torque each motor can apply [N·m]; commands beyond it are clipped. `None`, or 0
+    /// for a joint: no limit.
     pub torque_limit_nm: Option<Vec<f64>>,
     /// Seed of the noise generator.
     pub seed: u64,
@@ -44,7 +45,7 @@ impl HardwareEffects {
                     });
                 }
                 for (i, &x) in v.iter().enumerate() {
-                    check(|| format!("{name}[{i}]"), x, x > 0.0, "must be > 0")?;
+                    check(|| format!("{name}[{i}]"), x, x >= 0.0, "must be >= 0 (0: off)")?;
                 }
             }
         }
@@ -83,6 +84,17 @@ impl Sensors {
         })
     }
 
+    /// Position in the noise generator's stream, to save and restore a run exactly.
+    pub fn stream_position(&self) -> u128 {
+        self.rng.get_word_pos()
+    }
+
+    /// Continues the seeded noise sequence from `position` (see [`Sensors::stream_position`]).
+    pub fn set_stream_position(&mut self, position: u128) {
+        self.rng = ChaCha8Rng::seed_from_u64(self.effects.seed);
+        self.rng.set_word_pos(position);
+    }
+
     /// Back to the first sample of the seeded noise sequence.
     pub fn reset(&mut self) {
         self.rng = ChaCha8Rng::seed_from_u64(self.effects.seed);
@@ -93,9 +105,11 @@ impl Sensors {
     pub fn measure(&mut self, state: &ArmState, q_out: &mut [f64], qd_out: &mut [f64]) {
         for i in 0..state.q.len() {
             let mut q = state.q[i];
-            if let Some(counts) = &self.effects.encoder_counts_per_rev {
-                let resolution = std::f64::consts::TAU / counts[i];
-                q = (q / resolution).round() * resolution;
+            if let Some(&counts) = self.effects.encoder_counts_per_rev.as_ref().map(|c| &c[i]) {
+                if counts > 0.0 {
+                    let resolution = std::f64::consts::TAU / counts;
+                    q = (q / resolution).round() * resolution;
+                }
             }
             if self.effects.q_noise_std_rad > 0.0 {
                 q += self.q_noise.sample(&mut self.rng);
@@ -149,6 +163,8 @@ mod tests {
     #[test]
     fn wrong_lengths_and_negative_noise_are_rejected() {
         let e = HardwareEffects { torque_limit_nm: Some(vec![1.0]), ..Default::default() };
+        assert!(e.validate(2).is_err());
+        let e = HardwareEffects { torque_limit_nm: Some(vec![1.0, -1.0]), ..Default::default() };
         assert!(e.validate(2).is_err());
         let e = HardwareEffects { q_noise_std_rad: -1.0, ..Default::default() };
         assert!(e.validate(2).is_err());

@@ -155,7 +155,7 @@ impl ArmSimulator {
     }
 
     /// Limits the applied torque of joint i to ±`limits_nm[i]` [N·m] (actuator saturation);
-    /// `None` removes the limits.
+    /// a limit of 0 leaves that joint unlimited, `None` removes all limits.
     pub fn set_torque_limits(&mut self, limits_nm: Option<Vec<f64>>) -> Result<(), ParamError> {
         if let Some(l) = &limits_nm {
             if l.len() != self.params.dof() {
@@ -166,7 +166,7 @@ impl ArmSimulator {
                 });
             }
             for (i, &x) in l.iter().enumerate() {
-                super::params::check(|| format!("torque_limit_nm[{i}]"), x, x > 0.0, "must be > 0")?;
+                super::params::check(|| format!("torque_limit_nm[{i}]"), x, x >= 0.0, "must be >= 0 (0: no limit)")?;
             }
         }
         self.torque_limit_nm = limits_nm;
@@ -205,7 +205,8 @@ impl ArmSimulator {
         }
         for i in 0..n {
             self.tau[i] = match &self.torque_limit_nm {
-                Some(l) => tau[i].clamp(-l[i], l[i]),
+                Some(l) if l[i] > 0.0 => tau[i].clamp(-l[i], l[i]),
+                Some(_) => tau[i],
                 None => tau[i],
             };
         }
