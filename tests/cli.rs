@@ -147,3 +147,47 @@ fn three_joint_config_simulates() {
     assert!(t.column("q_4").is_none());
     assert!(t.column("q_1").unwrap()[2] > 0.0);
 }
+
+/// Runs `neurarm export arm -c CONFIG -o OUT` and returns (success, stderr, out exists).
+fn export_with(config_text: &str) -> (bool, String, bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = write(dir.path(), "my_arm.toml", config_text);
+    let out = dir.path().join("MyArm.fmu");
+    let o = neurarm().args(["export", "arm", "-c"]).arg(&cfg).arg("-o").arg(&out).output().unwrap();
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(o.status.success() || left.len() == 1, "stray files after a failed export: {left:?}");
+    (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned(), out.exists())
+}
+
+#[test]
+fn export_arm_rejects_invalid_configs_clearly() {
+    let good = ArmConfig::default().to_toml_string();
+    let (ok, stderr, exists) = export_with(&good.replacen("mass_kg = 1.6", "mass_kg = -1.6", 1));
+    assert!(!ok && !exists && stderr.contains("my_arm.toml") && stderr.contains("links[1].mass_kg = -1.6"), "{stderr}");
+
+    let mut none = ArmConfig::default();
+    none.arm.links.clear();
+    none.arm.friction.clear();
+    let (ok, stderr, exists) = export_with(&none.to_toml_string());
+    assert!(!ok && !exists && stderr.contains("at least one joint"), "{stderr}");
+
+    let (ok, stderr, exists) = export_with(&good.replacen("[arm]", "[arm]\nwheels = 4", 1));
+    assert!(!ok && !exists && stderr.contains("unknown field `wheels`"), "{stderr}");
+
+    let (ok, stderr, exists) = export_with(&good.replacen("internal_step_s = 0.00025", "internal_step_s = 0.0", 1));
+    assert!(!ok && !exists && stderr.contains("internal_step_s"), "{stderr}");
+}
+
+#[test]
+fn export_arm_names_the_fmu_after_its_file_and_checks_the_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("MyArm.fmu");
+    let o = neurarm().args(["export", "arm", "-o"]).arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("MyArm"));
+    assert!(std::fs::metadata(&out).unwrap().len() > 10_000);
+    let bad = dir.path().join("my-arm.fmu");
+    let o = neurarm().args(["export", "arm", "-o"]).arg(&bad).output().unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("model identifier 'my-arm'"));
+    assert!(!bad.exists());
+}
