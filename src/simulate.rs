@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use crate::arm::{end_effector_position, end_effector_velocity, ArmState, StepError};
+use crate::arm::{end_effector_state, ArmState, StepError};
 use crate::config::ArmConfig;
 use crate::table::{NumericTable, TableError};
 
@@ -78,8 +78,7 @@ pub fn simulate(config: &ArmConfig, initial: &ArmState, input: &TorqueInput) -> 
         row.push(t);
         row.extend(&state.q);
         row.extend(&state.qd);
-        row.extend(end_effector_position(&config.arm, &state.q).iter());
-        row.extend(end_effector_velocity(&config.arm, &state.q, &state.qd).iter());
+        row.extend(end_effector_state(&config.arm, &state.q, &state.qd));
         row.extend(&tau);
         if measured {
             sensors.measure(&state, &mut q_meas, &mut qd_meas);

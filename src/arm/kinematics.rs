@@ -42,6 +42,24 @@ pub fn end_effector_velocity(params: &ArmParams, q: &[f64], qd: &[f64]) -> Vecto
     vel
 }
 
+/// End-effector position (x, y) [m] and velocity (ẋ, ẏ) [m/s] in one pass (one sine and
+/// cosine per joint), as `[x, y, ẋ, ẏ]`.
+pub fn end_effector_state(params: &ArmParams, q: &[f64], qd: &[f64]) -> [f64; 4] {
+    let (mut theta, mut omega) = (0.0, 0.0);
+    let mut out = [0.0; 4];
+    for ((link, &qi), &qdi) in params.links.iter().zip(q).zip(qd) {
+        theta += qi;
+        omega += qdi;
+        let (s, c) = theta.sin_cos();
+        let l = link.length_m;
+        out[0] += l * c;
+        out[1] += l * s;
+        out[2] -= l * omega * s;
+        out[3] += l * omega * c;
+    }
+    out
+}
+
 /// The 2×n Jacobian of the end-effector position [m/rad]: column j is ∂x/∂q_j.
 pub fn jacobian(params: &ArmParams, q: &[f64]) -> DMatrix<f64> {
     let n = params.dof();
@@ -97,6 +115,17 @@ mod tests {
             let d = (end_effector_position(&p, &qp) - end_effector_position(&p, &qm)) / (2.0 * eps);
             assert!((d[0] - jac[(0, j)]).abs() < 1e-9);
             assert!((d[1] - jac[(1, j)]).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn end_effector_state_equals_position_and_velocity() {
+        let p = ArmParams::default_four_link();
+        let (q, qd) = ([0.3, -1.1, 0.7, 2.0], [1.2, -0.4, 2.5, -3.0]);
+        let s = end_effector_state(&p, &q, &qd);
+        let (x, v) = (end_effector_position(&p, &q), end_effector_velocity(&p, &q, &qd));
+        for (a, b) in s.iter().zip([x[0], x[1], v[0], v[1]]) {
+            assert!((a - b).abs() < 1e-15);
         }
     }
 

@@ -17,5 +17,5 @@ pub use dynamics::{
 pub use friction::{FrictionBranch, JointFriction};
 pub use hardware::{HardwareEffects, Sensors};
 pub use integrator::{ArmSimulator, ArmState, IntegratorSettings, StepError};
-pub use kinematics::{end_effector_position, end_effector_velocity, jacobian, jacobian_dot_qd};
+pub use kinematics::{end_effector_position, end_effector_state, end_effector_velocity, jacobian, jacobian_dot_qd};
 pub use params::{ArmParams, LinkParams, ParamError};

@@ -11,8 +11,6 @@
 //!   be taken) returns `Error` and puts the instance in the error state, where the standard
 //!   allows only getting values, restoring an FMU state, `fmi2Reset` and `fmi2FreeInstance`.
 
-use std::collections::HashMap;
-
 use super::codec::{Put, Reader};
 use super::description::{BaseType, SetPhase, LOG_CATEGORIES};
 use super::model::{Model, Values};
@@ -136,14 +134,24 @@ pub struct Instance {
     log: LogSink,
     debug_logging: bool,
     categories: Vec<bool>,
-    /// Variable index of each (base type, value reference).
-    lookup: HashMap<(BaseType, u32), usize>,
+    /// Variable index by base type (in [`BaseType`] order) and value reference; value
+    /// references are dense per type, so a vector beats a hash map on the hot path.
+    lookup: [Vec<Option<usize>>; 4],
 }
 
 /// Magic bytes at the start of a serialized FMU state.
 const STATE_MAGIC: &[u8; 8] = b"NRFMUST\0";
 /// Version of the serialized FMU state format.
 const STATE_VERSION: u32 = 1;
+
+fn type_slot(base: BaseType) -> usize {
+    match base {
+        BaseType::Real => 0,
+        BaseType::Integer => 1,
+        BaseType::Boolean => 2,
+        BaseType::String => 3,
+    }
+}
 
 fn phase_from(code: u8) -> Result<Phase, String> {
     use Phase::*;
@@ -166,12 +174,15 @@ impl Instance {
             ));
         }
         let description = model.description();
-        let lookup = description
-            .variables
-            .iter()
-            .enumerate()
-            .map(|(i, v)| ((v.base_type(), v.value_reference), i))
-            .collect();
+        let mut lookup: [Vec<Option<usize>>; 4] = Default::default();
+        for (i, v) in description.variables.iter().enumerate() {
+            let slot = &mut lookup[type_slot(v.base_type())];
+            let vr = v.value_reference as usize;
+            if slot.len() <= vr {
+                slot.resize(vr + 1, None);
+            }
+            slot[vr] = Some(i);
+        }
         let values = Values::start(description);
         Ok(Self {
             name: name.to_owned(),
@@ -328,11 +339,18 @@ impl Instance {
         Status::Ok
     }
 
+    fn index_of(&self, base: BaseType, vr: u32) -> Option<usize> {
+        self.lookup[type_slot(base)].get(vr as usize).copied().flatten()
+    }
+
     fn resolve(&self, function: &str, vr: u32, base: BaseType) -> Result<usize, Status> {
-        match self.lookup.get(&(base, vr)) {
-            Some(&i) => Ok(i),
+        match self.index_of(base, vr) {
+            Some(i) => Ok(i),
             None => {
-                let other = self.lookup.keys().find(|(_, r)| *r == vr).map(|(t, _)| t.name());
+                let other = [BaseType::Real, BaseType::Integer, BaseType::Boolean, BaseType::String]
+                    .into_iter()
+                    .find(|&t| self.index_of(t, vr).is_some())
+                    .map(BaseType::name);
                 Err(self.error(&match other {
                     Some(t) => format!("{function}: value reference {vr} is a {t} variable, not {}", base.name()),
                     None => format!("{function}: unknown value reference {vr}"),
@@ -415,7 +433,8 @@ impl Instance {
             return s;
         }
         if let Some((vr, v)) = vrs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
-            let name = &self.model.description().variables[self.lookup[&(BaseType::Real, *vr)]].name;
+            let index = self.index_of(BaseType::Real, *vr).expect("checked above");
+            let name = &self.model.description().variables[index].name;
             return self.error(&format!("fmi2SetReal: {v} for '{name}' is not a finite number; nothing was set"));
         }
         for (&vr, &v) in vrs.iter().zip(values) {

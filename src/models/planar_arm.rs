@@ -6,7 +6,7 @@
 //! hardware-like effects are on). Parameters: every field of [`ArmConfig`], one table below
 //! ([`JOINT_PARAMETERS`], [`ARM_PARAMETERS`]), plus the initial state `q0_i`, `qd0_i`.
 
-use crate::arm::{end_effector_position, end_effector_velocity, ArmSimulator, ArmState, FrictionBranch, Sensors};
+use crate::arm::{end_effector_state, ArmSimulator, ArmState, FrictionBranch, Sensors};
 use crate::config::ArmConfig;
 use crate::fmi2::codec::{Put, Reader};
 use crate::fmi2::description::{Causality, DefaultExperiment, Kind, ModelDescription, TableBuilder, Variability};
@@ -276,9 +276,7 @@ impl PlanarArmModel {
             values.reals[l.q[i] as usize] = self.state.q[i];
             values.reals[l.qd[i] as usize] = self.state.qd[i];
         }
-        let x = end_effector_position(params, &self.state.q);
-        let xd = end_effector_velocity(params, &self.state.q, &self.state.qd);
-        for (vr, v) in l.ee.iter().zip([x[0], x[1], xd[0], xd[1]]) {
+        for (vr, v) in l.ee.iter().zip(end_effector_state(params, &self.state.q, &self.state.qd)) {
             values.reals[*vr as usize] = v;
         }
         sensors.measure(&self.state, &mut self.q_meas, &mut self.qd_meas);

@@ -1,6 +1,6 @@
 //! A minimal FMI 2.0 host for tests: loads the FMU binary with `dlopen` (libloading), sets up
 //! an unpacked FMU folder, and captures log messages.
-#![allow(dead_code)]
+#![allow(dead_code, non_snake_case)]
 
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::{Path, PathBuf};
