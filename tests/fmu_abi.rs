@@ -443,3 +443,24 @@ fn get_status_reports_time_and_not_terminated() {
     assert!((t - 0.01).abs() < 1e-15);
     assert_eq!(b, 0);
 }
+
+#[test]
+fn variable_communication_steps_match_the_in_process_arm() {
+    // canHandleVariableCommunicationStepSize: any positive step, each split into RK4
+    // sub-steps of at most internal_step; compare with the in-process simulator.
+    let fmu = arm_fmu();
+    let i = bring_to(&fmu, Phase::StepComplete);
+    let (mut sim, _) = ArmConfig::default().build().unwrap();
+    let mut state = neurarm::arm::ArmState::at_rest(vec![0.0; 4]);
+    let tau: Vec<u32> = (1..=4).map(|j| fmu.vr(&format!("tau_{j}"))).collect();
+    let q: Vec<u32> = (1..=4).map(|j| fmu.vr(&format!("q_{j}"))).collect();
+    let mut t = 0.0;
+    for (k, h) in [1e-3, 2.5e-3, 1e-4, 0.0173, 3e-6, 0.05, 1e-3].iter().cycle().take(70).enumerate() {
+        let u = [2.5 * (k as f64).sin(), -1.5, 0.8, -0.35];
+        assert_eq!(i.set_real(&tau, &u), OK);
+        assert_eq!(i.step(t, *h), OK, "{}", i.log.dump());
+        sim.step(&mut state, &u, *h).unwrap();
+        t += h;
+    }
+    assert_eq!(i.get_real(&q).unwrap(), state.q);
+}

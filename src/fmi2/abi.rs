@@ -111,11 +111,7 @@ unsafe fn with(c: Component, name: &str, body: impl FnOnce(&mut Wrapper) -> Stat
     match catch_unwind(AssertUnwindSafe(|| body(&mut *wrapper))) {
         Ok(s) => s as c_int,
         Err(panic) => {
-            let why = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
+            let why = panic_message(&*panic);
             wrapper.instance.error(&format!("{name}: internal error ({why}); the instance can only be freed"));
             wrapper.instance.set_fatal();
             Status::Fatal as c_int
@@ -165,53 +161,44 @@ pub unsafe fn instantiate(
     _visible: c_int,
     logging_on: c_int,
 ) -> Component {
-    let result = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: per the standard, `functions` points to the host's callbacks if non-null.
-        let functions = unsafe { functions.as_ref() }?;
-        let logger = functions.logger?;
-        let name = unsafe { str_arg(instance_name) }.unwrap_or("");
-        let host = HostLogger {
-            logger,
-            environment: functions.component_environment,
-            name: CString::new(name).unwrap_or_default(),
-        };
-        let fail = |message: String| {
-            host.log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
-            None
-        };
+    // SAFETY: per the standard, `functions` points to the host's callbacks if non-null.
+    let Some(functions) = (unsafe { functions.as_ref() }) else { return std::ptr::null_mut() };
+    let Some(logger) = functions.logger else { return std::ptr::null_mut() };
+    let name = unsafe { str_arg(instance_name) }.unwrap_or("");
+    let host = |name: &str| HostLogger { logger, environment: functions.component_environment, name: CString::new(name).unwrap_or_default() };
+    let fail = |message: String| {
+        host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
+        std::ptr::null_mut()
+    };
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Component, String> {
         if instance_name.is_null() || name.is_empty() {
-            return fail("the instance name is NULL or empty".into());
+            return Err("the instance name is NULL or empty".into());
         }
         if fmu_type != FMI2_COSIMULATION {
-            return fail(format!("fmuType {fmu_type} requested, this FMU supports only fmi2CoSimulation (1)"));
+            return Err(format!("fmuType {fmu_type} requested, this FMU supports only fmi2CoSimulation (1)"));
         }
-        let Some(guid) = (unsafe { str_arg(guid) }) else {
-            return fail("the GUID is NULL or not UTF-8".into());
-        };
-        let Some(location) = (unsafe { str_arg(resource_location) }) else {
-            return fail("the resource location is NULL: this FMU reads its model from resources/".into());
-        };
-        let folder = match resource_folder(location) {
-            Ok(f) => f,
-            Err(e) => return fail(e),
-        };
-        let model = match factory(&folder) {
-            Ok(m) => m,
-            Err(e) => return fail(e),
-        };
-        let name = name.to_owned();
-        let sink: LogSink = Box::new(move |status, category, message| host.log(status, category, message));
-        match Instance::new(&name, guid, model, sink, logging_on != 0) {
-            Ok(instance) => Some(Box::into_raw(Box::new(Wrapper { instance, strings: Vec::new() })) as Component),
-            Err(e) => {
-                // The sink moved into the failed instance; log through the callbacks again.
-                let host = HostLogger { logger, environment: functions.component_environment, name: CString::new(name).unwrap_or_default() };
-                host.log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {e}"));
-                None
-            }
-        }
+        let guid = unsafe { str_arg(guid) }.ok_or("the GUID is NULL or not UTF-8")?;
+        let location = unsafe { str_arg(resource_location) }
+            .ok_or("the resource location is NULL: this FMU reads its model from resources/")?;
+        let model = factory(&resource_folder(location)?)?;
+        let sink_host = host(name);
+        let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
+        let instance = Instance::new(name, guid, model, sink, logging_on != 0)?;
+        Ok(Box::into_raw(Box::new(Wrapper { instance, strings: Vec::new() })) as Component)
     }));
-    result.ok().flatten().unwrap_or(std::ptr::null_mut())
+    match result {
+        Ok(Ok(c)) => c,
+        Ok(Err(message)) => fail(message),
+        Err(panic) => fail(format!("internal error ({})", panic_message(&*panic))),
+    }
+}
+
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
 }
 
 /// `fmi2FreeInstance`.
