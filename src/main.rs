@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use neurarm::arm::ArmState;
 use neurarm::config::ArmConfig;
 use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
@@ -30,15 +30,8 @@ enum Command {
         /// Torque input CSV.
         #[arg(long, short = 't')]
         torque: PathBuf,
-        /// Arm configuration (TOML); the default 4-link arm if omitted.
-        #[arg(long, short = 'c')]
-        config: Option<PathBuf>,
-        /// Initial joint angles [rad], comma-separated (default: all 0).
-        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-        q0: Option<Vec<f64>>,
-        /// Initial joint velocities [rad/s], comma-separated (default: all 0).
-        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-        qd0: Option<Vec<f64>>,
+        #[command(flatten)]
+        arm: ArmSource,
         /// Output trajectory CSV; written only if the whole simulation succeeds.
         #[arg(long, short = 'o')]
         output: PathBuf,
@@ -55,22 +48,42 @@ enum Export {
     /// The arm as an FMU (`PlanarArm`): torque inputs; angle, velocity and end-effector outputs;
     /// every parameter of the configuration as an FMU parameter.
     Arm {
-        /// Arm configuration (TOML); the default 4-link arm if omitted.
-        #[arg(long, short = 'c')]
-        config: Option<PathBuf>,
+        /// The arm; its initial state becomes the FMU parameters q0_i, qd0_i.
+        #[command(flatten)]
+        arm: ArmSource,
         /// Model identifier (default: the output file's name, e.g. MyArm for MyArm.fmu).
         #[arg(long)]
         name: Option<String>,
-        /// Initial joint angles [rad], comma-separated (default: all 0); FMU parameters q0_i.
-        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-        q0: Option<Vec<f64>>,
-        /// Initial joint velocities [rad/s], comma-separated (default: all 0); parameters qd0_i.
-        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-        qd0: Option<Vec<f64>>,
         /// Output .fmu file.
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
+}
+
+/// Which arm, and from which state: shared by the commands that simulate or export one.
+#[derive(Args)]
+struct ArmSource {
+    /// Arm configuration (TOML); the default 4-link arm if omitted.
+    #[arg(long, short = 'c')]
+    config: Option<PathBuf>,
+    /// Initial joint angles [rad], comma-separated (default: all 0).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    q0: Option<Vec<f64>>,
+    /// Initial joint velocities [rad/s], comma-separated (default: all 0).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    qd0: Option<Vec<f64>>,
+}
+
+impl ArmSource {
+    fn load(self) -> Result<(ArmConfig, ArmState)> {
+        let config = match self.config {
+            Some(path) => ArmConfig::from_toml_file(&path)?,
+            None => ArmConfig::default(),
+        };
+        let n = config.arm.dof();
+        let initial = ArmState { q: initial_vector("q0", self.q0, n)?, qd: initial_vector("qd0", self.qd0, n)? };
+        Ok((config, initial))
+    }
 }
 
 fn initial_vector(name: &str, given: Option<Vec<f64>>, n: usize) -> Result<Vec<f64>> {
@@ -86,25 +99,17 @@ fn initial_vector(name: &str, given: Option<Vec<f64>>, n: usize) -> Result<Vec<f
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Simulate { torque, config, q0, qd0, output } => {
-            let config = match config {
-                Some(path) => ArmConfig::from_toml_file(&path)?,
-                None => ArmConfig::default(),
-            };
-            let n = config.arm.dof();
-            let initial = ArmState { q: initial_vector("q0", q0, n)?, qd: initial_vector("qd0", qd0, n)? };
-            let input = TorqueInput::read_csv(&torque, n)?;
+        Command::Simulate { torque, arm, output } => {
+            let (config, initial) = arm.load()?;
+            let input = TorqueInput::read_csv(&torque, config.arm.dof())?;
             let trajectory = simulate(&config, &initial, &input)?;
             write_atomic(&output, &trajectory.names, trajectory.rows.into_iter())
                 .with_context(|| format!("writing {}", output.display()))?;
             eprintln!("wrote {} rows to {}", input.time.len(), output.display());
         }
         Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
-        Command::Export(Export::Arm { config, name, q0, qd0, output }) => {
-            let config = match config {
-                Some(path) => ArmConfig::from_toml_file(&path)?,
-                None => ArmConfig::default(),
-            };
+        Command::Export(Export::Arm { arm, name, output }) => {
+            let (config, initial) = arm.load()?;
             let n = config.arm.dof();
             let identifier = match name {
                 Some(n) => n,
@@ -112,7 +117,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             let spec = FmuSpec {
                 identifier,
-                model: ModelSpec::PlanarArm { config, q0: initial_vector("q0", q0, n)?, qd0: initial_vector("qd0", qd0, n)? },
+                model: ModelSpec::PlanarArm { config, q0: initial.q, qd0: initial.qd },
             };
             export_fmu(&spec, &output).map_err(anyhow::Error::msg)?;
             eprintln!("wrote {} ({}, {n} joints)", output.display(), spec.identifier);

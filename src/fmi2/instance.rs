@@ -444,40 +444,32 @@ impl Instance {
         Status::Ok
     }
 
-    /// `fmi2SetInteger`.
-    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
-        if let Err(s) = self.check_settable("fmi2SetInteger", BaseType::Integer, vrs) {
+    /// Sets variables of a non-real base type after the checks; `slot` picks the storage.
+    fn set<T: Clone>(&mut self, function: &str, base: BaseType, vrs: &[u32], values: &[T], slot: fn(&mut Values) -> &mut Vec<T>) -> Status {
+        if let Err(s) = self.check_settable(function, base, vrs) {
             return s;
         }
-        for (&vr, &v) in vrs.iter().zip(values) {
-            self.values.integers[vr as usize] = v;
+        let storage = slot(&mut self.values);
+        for (&vr, v) in vrs.iter().zip(values) {
+            storage[vr as usize].clone_from(v);
         }
         self.dirty = true;
         Status::Ok
+    }
+
+    /// `fmi2SetInteger`.
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        self.set("fmi2SetInteger", BaseType::Integer, vrs, values, |v| &mut v.integers)
     }
 
     /// `fmi2SetBoolean`.
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
-        if let Err(s) = self.check_settable("fmi2SetBoolean", BaseType::Boolean, vrs) {
-            return s;
-        }
-        for (&vr, &v) in vrs.iter().zip(values) {
-            self.values.booleans[vr as usize] = v;
-        }
-        self.dirty = true;
-        Status::Ok
+        self.set("fmi2SetBoolean", BaseType::Boolean, vrs, values, |v| &mut v.booleans)
     }
 
     /// `fmi2SetString`.
     pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> Status {
-        if let Err(s) = self.check_settable("fmi2SetString", BaseType::String, vrs) {
-            return s;
-        }
-        for (&vr, v) in vrs.iter().zip(values) {
-            self.values.strings[vr as usize].clone_from(v);
-        }
-        self.dirty = true;
-        Status::Ok
+        self.set("fmi2SetString", BaseType::String, vrs, values, |v| &mut v.strings)
     }
 
     /// `fmi2DoStep` from `current` [s] by `step` [s].
