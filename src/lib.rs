@@ -9,7 +9,9 @@
 pub mod arm;
 pub mod config;
 pub mod fmi2;
+pub mod linalg;
 pub mod models;
+pub mod nn;
 #[cfg(feature = "app")]
 pub mod simulate;
 #[cfg(feature = "app")]

@@ -315,7 +315,8 @@ impl ArmSimulator {
                 self.reduced[a * m + b] = self.mass[i * n + j];
             }
         }
-        cholesky_solve_in_place(&mut self.reduced[..m * m], m, &mut self.rhs[..m]);
+        // H is positive definite for valid parameters, so is its principal submatrix.
+        crate::linalg::cholesky_solve_in_place(&mut self.reduced[..m * m], m, &mut self.rhs[..m]);
         self.kv[k].fill(0.0);
         for (a, &i) in self.free.iter().enumerate() {
             self.kv[k][i] = self.rhs[a];
@@ -335,41 +336,6 @@ pub fn substep_count(dt: f64, max_step: f64) -> usize {
     count.max(1.0) as usize
 }
 
-/// Solves A x = b for symmetric positive definite A (row-major m×m, overwritten by its
-/// Cholesky factor); x replaces b. Hand-written because nalgebra's decompositions take owned
-/// matrices, and the step must not allocate.
-fn cholesky_solve_in_place(a: &mut [f64], m: usize, b: &mut [f64]) {
-    for j in 0..m {
-        let mut d = a[j * m + j];
-        for k in 0..j {
-            d -= a[j * m + k] * a[j * m + k];
-        }
-        let d = d.sqrt();
-        a[j * m + j] = d;
-        for i in j + 1..m {
-            let mut s = a[i * m + j];
-            for k in 0..j {
-                s -= a[i * m + k] * a[j * m + k];
-            }
-            a[i * m + j] = s / d;
-        }
-    }
-    for i in 0..m {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[i * m + k] * b[k];
-        }
-        b[i] = s / a[i * m + i];
-    }
-    for i in (0..m).rev() {
-        let mut s = b[i];
-        for k in i + 1..m {
-            s -= a[k * m + i] * b[k];
-        }
-        b[i] = s / a[i * m + i];
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -380,21 +346,5 @@ mod tests {
         assert_eq!(substep_count(1e-3, 1e-3), 1);
         assert_eq!(substep_count(1.1e-3, 1e-3), 2);
         assert_eq!(substep_count(1e-5, 1e-3), 1);
-    }
-
-    #[test]
-    fn cholesky_solves_spd_system() {
-        // A = L Lᵀ with a known L; solve and compare with A x.
-        let a0 = [4.0, 2.0, 0.6, 2.0, 5.0, 1.5, 0.6, 1.5, 3.0];
-        let x_true = [1.0, -2.0, 0.5];
-        let mut b = [0.0; 3];
-        for i in 0..3 {
-            b[i] = (0..3).map(|k| a0[i * 3 + k] * x_true[k]).sum();
-        }
-        let mut a = a0;
-        cholesky_solve_in_place(&mut a, 3, &mut b);
-        for i in 0..3 {
-            assert!((b[i] - x_true[i]).abs() < 1e-14);
-        }
     }
 }

@@ -1,0 +1,88 @@
+//! Small dense linear algebra that must not allocate (used inside integrator steps and
+//! training epochs, where nalgebra's decompositions would take owned matrices).
+
+/// Dot product with four independent accumulators (lets the compiler pipeline and vectorise
+/// what a single running sum would serialise).
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (mut s0, mut s1, mut s2, mut s3) = (0.0, 0.0, 0.0, 0.0);
+    let chunks = n / 4;
+    for c in 0..chunks {
+        let i = 4 * c;
+        s0 += a[i] * b[i];
+        s1 += a[i + 1] * b[i + 1];
+        s2 += a[i + 2] * b[i + 2];
+        s3 += a[i + 3] * b[i + 3];
+    }
+    let mut s = (s0 + s1) + (s2 + s3);
+    for i in 4 * chunks..n {
+        s += a[i] * b[i];
+    }
+    s
+}
+
+/// Solves A x = b for symmetric positive definite A (row-major m×m; its lower triangle is
+/// overwritten by the Cholesky factor L), x replacing b. Returns false, leaving `b`
+/// meaningless, if A is not numerically positive definite.
+pub fn cholesky_solve_in_place(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
+    for j in 0..m {
+        let (done, rest) = a.split_at_mut(j * m);
+        let row_j = &mut rest[..m];
+        // L_jk for k < j: (A_jk − Σ_{l<k} L_jl L_kl) / L_kk
+        for k in 0..j {
+            let row_k = &done[k * m..k * m + m];
+            row_j[k] = (row_j[k] - dot(&row_j[..k], &row_k[..k])) / row_k[k];
+        }
+        let d = row_j[j] - dot(&row_j[..j], &row_j[..j]);
+        if !(d > 0.0 && d.is_finite()) {
+            return false;
+        }
+        row_j[j] = d.sqrt();
+    }
+    for i in 0..m {
+        let row = &a[i * m..i * m + i];
+        b[i] = (b[i] - dot(row, &b[..i])) / a[i * m + i];
+    }
+    for i in (0..m).rev() {
+        let mut s = b[i];
+        for k in i + 1..m {
+            s -= a[k * m + i] * b[k];
+        }
+        b[i] = s / a[i * m + i];
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_spd_systems_of_many_sizes() {
+        for m in [1, 2, 3, 5, 8, 17, 40] {
+            // A = B Bᵀ + m I is SPD; compare A x with b.
+            let bm: Vec<f64> = (0..m * m).map(|i| ((i * 37 % 11) as f64 - 5.0) / 7.0).collect();
+            let mut a = vec![0.0; m * m];
+            for i in 0..m {
+                for j in 0..m {
+                    a[i * m + j] = (0..m).map(|k| bm[i * m + k] * bm[j * m + k]).sum::<f64>() + if i == j { m as f64 } else { 0.0 };
+                }
+            }
+            let x_true: Vec<f64> = (0..m).map(|i| (i as f64 * 0.7).sin()).collect();
+            let mut b: Vec<f64> = (0..m).map(|i| (0..m).map(|k| a[i * m + k] * x_true[k]).sum()).collect();
+            let mut f = a.clone();
+            assert!(cholesky_solve_in_place(&mut f, m, &mut b));
+            for i in 0..m {
+                assert!((b[i] - x_true[i]).abs() < 1e-12, "m = {m}");
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_indefinite_matrices() {
+        let mut a = [1.0, 2.0, 2.0, 1.0];
+        let mut b = [1.0, 1.0];
+        assert!(!cholesky_solve_in_place(&mut a, 2, &mut b));
+    }
+}

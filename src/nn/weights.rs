@@ -1,0 +1,164 @@
+//! The weights file: JSON, versioned, with everything needed to use and to judge a net.
+
+use std::path::Path;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::lm::{TrainReport, TrainSettings};
+use super::mlp::{MinMaxScaling, Mlp};
+
+/// Value of `format` in every weights file.
+pub const FORMAT: &str = "neurarm-weights";
+/// The version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// A named input or output with its unit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Signal {
+    /// Name, e.g. `qd_1`.
+    pub name: String,
+    /// Unit, e.g. `rad/s`.
+    pub unit: String,
+}
+
+/// A trained net as stored on disk.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WeightsFile {
+    /// Always `neurarm-weights`.
+    pub format: String,
+    /// Format version.
+    pub version: u32,
+    /// The inputs, in order.
+    pub inputs: Vec<Signal>,
+    /// The outputs, in order.
+    pub outputs: Vec<Signal>,
+    /// Input weights, one row per hidden neuron.
+    pub iw: Vec<Vec<f64>>,
+    /// Hidden biases.
+    pub b1: Vec<f64>,
+    /// Layer weights, one row per output.
+    pub lw: Vec<Vec<f64>>,
+    /// Output biases.
+    pub b2: Vec<f64>,
+    /// Input scaling (mapminmax).
+    pub input_scaling: MinMaxScaling,
+    /// Output scaling (mapminmax).
+    pub output_scaling: MinMaxScaling,
+    /// How it was trained.
+    pub training: TrainSettings,
+    /// How training went (errors in the outputs' units squared).
+    pub report: TrainReport,
+}
+
+/// Why a weights file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum WeightsError {
+    /// The file could not be read or written.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// The file is not valid.
+    #[error("{path}: {message}")]
+    Invalid {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl WeightsFile {
+    /// Wraps a trained net with its signal names and training record.
+    pub fn new(net: &Mlp, inputs: Vec<Signal>, outputs: Vec<Signal>, training: TrainSettings, report: TrainReport) -> Self {
+        let rows = |m: &DMatrix<f64>| m.row_iter().map(|r| r.iter().copied().collect()).collect();
+        Self {
+            format: FORMAT.into(),
+            version: VERSION,
+            inputs,
+            outputs,
+            iw: rows(&net.iw),
+            b1: net.b1.iter().copied().collect(),
+            lw: rows(&net.lw),
+            b2: net.b2.iter().copied().collect(),
+            input_scaling: net.input_scaling.clone(),
+            output_scaling: net.output_scaling.clone(),
+            training,
+            report,
+        }
+    }
+
+    /// Checks sizes, finiteness and version; returns the network.
+    pub fn network(&self) -> Result<Mlp, String> {
+        if self.format != FORMAT {
+            return Err(format!("format is '{}', expected '{FORMAT}'", self.format));
+        }
+        if self.version != VERSION {
+            return Err(format!("version {} is not supported (this build reads version {VERSION})", self.version));
+        }
+        let (n, h, k) = (self.inputs.len(), self.b1.len(), self.outputs.len());
+        if n == 0 || h == 0 || k == 0 {
+            return Err(format!("empty network: {n} inputs, {h} hidden neurons, {k} outputs"));
+        }
+        let shape = |name: &str, rows: &Vec<Vec<f64>>, r: usize, c: usize| -> Result<(), String> {
+            if rows.len() != r {
+                return Err(format!("{name} has {} rows, expected {r}", rows.len()));
+            }
+            match rows.iter().position(|row| row.len() != c) {
+                Some(i) => Err(format!("{name} row {i} has {} values, expected {c}", rows[i].len())),
+                None => Ok(()),
+            }
+        };
+        shape("iw", &self.iw, h, n)?;
+        shape("lw", &self.lw, k, h)?;
+        if self.b2.len() != k {
+            return Err(format!("b2 has {} values, expected {k}", self.b2.len()));
+        }
+        for (name, s, len) in [("input_scaling", &self.input_scaling, n), ("output_scaling", &self.output_scaling, k)] {
+            if s.min.len() != len || s.max.len() != len {
+                return Err(format!("{name} has {}/{} min/max values, expected {len}", s.min.len(), s.max.len()));
+            }
+            if let Some(i) = (0..len).find(|&i| !(s.min[i] <= s.max[i])) {
+                return Err(format!("{name} row {i}: min {} is not <= max {}", s.min[i], s.max[i]));
+            }
+        }
+        let all = self.iw.iter().flatten().chain(&self.b1).chain(self.lw.iter().flatten()).chain(&self.b2);
+        let scalings = [&self.input_scaling, &self.output_scaling].into_iter().flat_map(|s| s.min.iter().chain(&s.max));
+        if let Some(v) = all.chain(scalings).find(|v| !v.is_finite()) {
+            return Err(format!("a weight or scaling value is {v}, not a finite number"));
+        }
+        Ok(Mlp {
+            iw: DMatrix::from_fn(h, n, |j, i| self.iw[j][i]),
+            b1: DVector::from_column_slice(&self.b1),
+            lw: DMatrix::from_fn(k, h, |o, j| self.lw[o][j]),
+            b2: DVector::from_column_slice(&self.b2),
+            input_scaling: self.input_scaling.clone(),
+            output_scaling: self.output_scaling.clone(),
+        })
+    }
+
+    /// Parses JSON text; `path` names the source in messages.
+    pub fn from_json(text: &str, path: &str) -> Result<Self, WeightsError> {
+        let file: Self = serde_json::from_str(text).map_err(|e| WeightsError::Invalid { path: path.into(), message: e.to_string() })?;
+        file.network().map_err(|message| WeightsError::Invalid { path: path.into(), message })?;
+        Ok(file)
+    }
+
+    /// Reads and checks a weights file.
+    pub fn read(path: &Path) -> Result<Self, WeightsError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| WeightsError::Io { path: shown.clone(), message: e.to_string() })?;
+        Self::from_json(&text, &shown)
+    }
+
+    /// The file as pretty JSON; floats round-trip exactly.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("weights serialise to JSON")
+    }
+}
