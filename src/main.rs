@@ -9,7 +9,11 @@ use neurarm::arm::ArmState;
 use neurarm::config::ArmConfig;
 use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
 use neurarm::simulate::{simulate, TorqueInput};
-use neurarm::table::write_atomic;
+use neurarm::nn::{train, Signal, TrainSettings, WeightsFile};
+use neurarm::table::{write_atomic, write_text_atomic, NumericTable};
+use nalgebra::DMatrix;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 
 #[derive(Parser)]
 #[command(name = "neurarm", version, about = "Learn robot-joint dynamics with neural networks and ship them as FMI 2.0 components")]
@@ -41,6 +45,54 @@ enum Command {
     /// Build an FMI 2.0 Co-Simulation FMU.
     #[command(subcommand)]
     Export(Export),
+    /// Train a two-layer network (tansig hidden layer, linear output) with Levenberg–Marquardt.
+    ///
+    /// The data CSV has a header; each row is one sample. Defaults follow MATLAB's trainlm
+    /// (μ 0.001, ×0.1 / ×10, 1000 epochs, 6 validation failures, 70/15/15 random split).
+    Train {
+        /// Training pairs (CSV with a header).
+        #[arg(long, short = 'd')]
+        data: PathBuf,
+        /// Input columns, comma-separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        inputs: Vec<String>,
+        /// Target columns, comma-separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        targets: Vec<String>,
+        /// Hidden neurons.
+        #[arg(long, default_value_t = 10)]
+        hidden: usize,
+        /// Trainings from different initial weights; the best on validation is kept.
+        #[arg(long, default_value_t = 1)]
+        restarts: usize,
+        /// Seed of the split and the initial weights.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Largest number of epochs.
+        #[arg(long, default_value_t = 1000)]
+        epochs: usize,
+        /// Validation failures in a row that stop training.
+        #[arg(long, default_value_t = 6)]
+        max_fail: usize,
+        /// Train/validation/test fractions, comma-separated.
+        #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [0.70, 0.15, 0.15])]
+        split: Vec<f64>,
+        /// Output weights file (JSON).
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
+    /// Apply a trained network to the input columns of a CSV; writes inputs and outputs.
+    Eval {
+        /// Weights file (JSON).
+        #[arg(long, short = 'n')]
+        net: PathBuf,
+        /// Input CSV with the net's input columns.
+        #[arg(long, short = 'd')]
+        data: PathBuf,
+        /// Output CSV.
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -52,6 +104,22 @@ enum Export {
         #[command(flatten)]
         arm: ArmSource,
         /// Model identifier (default: the output file's name, e.g. MyArm for MyArm.fmu).
+        #[arg(long)]
+        name: Option<String>,
+        /// Output .fmu file.
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
+    /// The NN compensator as an FMU (`NnCompensator`): inputs q_i, qd_i; outputs the friction,
+    /// gravity and total compensating torques; Boolean parameters enable each part.
+    Compensator {
+        /// Friction net of each joint (1 input: velocity, 1 output: torque), in joint order.
+        #[arg(long, value_delimiter = ',')]
+        friction: Vec<PathBuf>,
+        /// Gravity net (n angle inputs, n torque outputs).
+        #[arg(long)]
+        gravity: Option<PathBuf>,
+        /// Model identifier (default: the output file's name).
         #[arg(long)]
         name: Option<String>,
         /// Output .fmu file.
@@ -108,22 +176,117 @@ fn run(cli: Cli) -> Result<()> {
             eprintln!("wrote {} rows to {}", input.time.len(), output.display());
         }
         Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
+        Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, output } => {
+            let settings = TrainSettings { hidden, restarts, seed, epochs, max_fail, split: [split[0], split[1], split[2]], ..Default::default() };
+            let weights = train_from_csv(&data, &inputs, &targets, settings)?;
+            write_text_atomic(&output, &weights.to_json()).with_context(|| format!("writing {}", output.display()))?;
+            let r = &weights.report;
+            let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
+            eprintln!(
+                "wrote {}: {} epochs (best {}), stopped by {:?}; MSE train {:.3e}, validation {}, test {} [target units²]",
+                output.display(), r.epochs, r.best_epoch, r.stop_reason, r.train_mse, opt(r.validation_mse), opt(r.test_mse)
+            );
+        }
+        Command::Eval { net, data, output } => {
+            let weights = WeightsFile::read(&net)?;
+            let mlp = weights.network().map_err(anyhow::Error::msg)?;
+            let names: Vec<&str> = weights.inputs.iter().map(|s| s.name.as_str()).collect();
+            let table = NumericTable::read(&data, &names)?;
+            let columns: Vec<&[f64]> = names.iter().map(|n| table.column(n).expect("required")).collect();
+            let mut header: Vec<String> = names.iter().map(|s| s.to_string()).collect();
+            header.extend(weights.outputs.iter().map(|s| s.name.clone()));
+            let rows = (0..table.rows()).map(|r| {
+                let x: Vec<f64> = columns.iter().map(|c| c[r]).collect();
+                let mut row = x.clone();
+                row.extend(mlp.evaluate(&x));
+                row
+            });
+            write_atomic(&output, &header, rows).with_context(|| format!("writing {}", output.display()))?;
+            eprintln!("wrote {} rows to {}", table.rows(), output.display());
+        }
+        Command::Export(Export::Compensator { friction, gravity, name, output }) => {
+            let identifier = identifier_for(name, &output, "NnCompensator");
+            let joints = if !friction.is_empty() {
+                friction.len()
+            } else if let Some(g) = &gravity {
+                WeightsFile::read(g)?.inputs.len()
+            } else {
+                bail!("give --friction nets, a --gravity net, or both");
+            };
+            let mut sources: Vec<(String, PathBuf)> = friction.iter().enumerate().map(|(i, p)| (format!("friction_{}.json", i + 1), p.clone())).collect();
+            if let Some(g) = &gravity {
+                sources.push(("gravity.json".into(), g.clone()));
+            }
+            let spec = FmuSpec {
+                identifier,
+                model: ModelSpec::NnCompensator {
+                    joints,
+                    friction: (1..=friction.len()).map(|i| format!("friction_{i}.json")).collect(),
+                    gravity: gravity.as_ref().map(|_| "gravity.json".to_owned()),
+                    enable_friction: !friction.is_empty(),
+                    enable_gravity: gravity.is_some(),
+                },
+            };
+            export_fmu(&spec, &sources, &output).map_err(anyhow::Error::msg)?;
+            eprintln!("wrote {} ({}, {joints} joints)", output.display(), spec.identifier);
+        }
         Command::Export(Export::Arm { arm, name, output }) => {
             let (config, initial) = arm.load()?;
             let n = config.arm.dof();
-            let identifier = match name {
-                Some(n) => n,
-                None => output.file_stem().and_then(|s| s.to_str()).unwrap_or("PlanarArm").to_owned(),
-            };
+            let identifier = identifier_for(name, &output, "PlanarArm");
             let spec = FmuSpec {
                 identifier,
                 model: ModelSpec::PlanarArm { config, q0: initial.q, qd0: initial.qd },
             };
-            export_fmu(&spec, &output).map_err(anyhow::Error::msg)?;
+            export_fmu(&spec, &[], &output).map_err(anyhow::Error::msg)?;
             eprintln!("wrote {} ({}, {n} joints)", output.display(), spec.identifier);
         }
     }
     Ok(())
+}
+
+/// The model identifier: as given, or the output file's name.
+fn identifier_for(name: Option<String>, output: &std::path::Path, fallback: &str) -> String {
+    name.unwrap_or_else(|| output.file_stem().and_then(|s| s.to_str()).unwrap_or(fallback).to_owned())
+}
+
+/// A unit guessed from a column name by the project's naming: q… rad, qd… rad/s, tau… N.m.
+fn unit_of(name: &str) -> String {
+    let unit = if name.starts_with("qd") {
+        "rad/s"
+    } else if name.starts_with('q') {
+        "rad"
+    } else if name.starts_with("tau") {
+        "N.m"
+    } else {
+        ""
+    };
+    unit.to_owned()
+}
+
+/// Reads the pairs, trains with a progress bar on a terminal, and wraps the result.
+fn train_from_csv(data: &std::path::Path, inputs: &[String], targets: &[String], settings: TrainSettings) -> Result<WeightsFile> {
+    let required: Vec<&str> = inputs.iter().chain(targets).map(String::as_str).collect();
+    let table = NumericTable::read(data, &required)?;
+    let matrix = |names: &[String]| {
+        let cols: Vec<&[f64]> = names.iter().map(|n| table.column(n).expect("required")).collect();
+        DMatrix::from_fn(names.len(), table.rows(), |r, c| cols[r][c])
+    };
+    let (x, t) = (matrix(inputs), matrix(targets));
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::new((settings.epochs * settings.restarts) as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(ProgressStyle::with_template("{bar:30} restart {prefix} {msg}").expect("valid template"));
+    let trained = train(&x, &t, &settings, &mut |e| {
+        bar.set_prefix((e.restart + 1).to_string());
+        bar.set_position((e.restart * settings.epochs + e.epoch) as u64);
+        bar.set_message(format!("epoch {} MSE {:.3e} val {:.3e} mu {:.0e}", e.epoch, e.train_mse, e.validation_mse, e.mu));
+    })?;
+    bar.finish_and_clear();
+    let signals = |names: &[String]| names.iter().map(|n| Signal { name: n.clone(), unit: unit_of(n) }).collect();
+    Ok(WeightsFile::new(&trained.net, signals(inputs), signals(targets), settings, trained.report))
 }
 
 fn main() -> ExitCode {

@@ -150,6 +150,20 @@ fn csv_cause(e: &csv::Error) -> String {
     }
 }
 
+/// Writes `text` to `path` atomically: a temporary file beside it is renamed over `path` once
+/// complete, so a failure leaves no partial file.
+pub fn write_text_atomic(path: &Path, text: &str) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::Builder::new().prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
+    tmp.write_all(text.as_bytes())?;
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
 /// Writes a numeric table to `path` atomically: the rows go to a temporary file beside it,
 /// which is renamed over `path` only once complete, so a failure leaves no partial file.
 /// Numbers are written in Rust's shortest round-trip form, so reading gives the same bits.

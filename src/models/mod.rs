@@ -5,6 +5,7 @@
 //! model description is a hash of the description made from that spec, so a binary, spec and
 //! XML that do not belong together are refused at instantiation.
 
+pub mod compensator;
 pub mod planar_arm;
 
 use std::path::Path;
@@ -15,6 +16,7 @@ use crate::arm::ArmState;
 use crate::config::ArmConfig;
 use crate::fmi2::description::ModelDescription;
 use crate::fmi2::model::Model;
+use crate::nn::WeightsFile;
 
 /// Name of the spec file in an FMU's `resources/` folder.
 pub const SPEC_FILE: &str = "neurarm.toml";
@@ -31,6 +33,19 @@ pub enum ModelSpec {
         q0: Vec<f64>,
         /// Initial joint velocities [rad/s].
         qd0: Vec<f64>,
+    },
+    /// The NN compensator; weights files live beside the spec in `resources/`.
+    NnCompensator {
+        /// Number of joints.
+        joints: usize,
+        /// File of each joint's friction net, in order; empty for no friction part.
+        friction: Vec<String>,
+        /// File of the gravity net, if any.
+        gravity: Option<String>,
+        /// Start value of the `enable_friction` parameter.
+        enable_friction: bool,
+        /// Start value of the `enable_gravity` parameter.
+        enable_gravity: bool,
     },
 }
 
@@ -51,8 +66,13 @@ impl FmuSpec {
         Self { identifier: identifier.to_owned(), model: ModelSpec::PlanarArm { config, q0: vec![0.0; n], qd0: vec![0.0; n] } }
     }
 
-    /// The model this spec describes.
+    /// The model this spec describes, for specs that need no files beside them.
     pub fn build(&self) -> Result<Box<dyn Model>, String> {
+        self.build_from(None)
+    }
+
+    /// The model this spec describes, reading any weights files from `resources`.
+    pub fn build_from(&self, resources: Option<&Path>) -> Result<Box<dyn Model>, String> {
         check_identifier(&self.identifier)?;
         match &self.model {
             ModelSpec::PlanarArm { config, q0, qd0 } => Ok(Box::new(planar_arm::PlanarArmModel::new(
@@ -60,6 +80,34 @@ impl FmuSpec {
                 config.clone(),
                 ArmState { q: q0.clone(), qd: qd0.clone() },
             )?)),
+            ModelSpec::NnCompensator { joints, friction, gravity, enable_friction, enable_gravity } => {
+                let dir = resources.ok_or("the compensator reads its weights from resources/, and none was given")?;
+                let mut crc = crc32fast::Hasher::new();
+                let mut load = |name: &str| -> Result<WeightsFile, String> {
+                    let path = dir.join(name);
+                    let text = std::fs::read_to_string(&path).map_err(|e| format!("weights file {}: {e}", path.display()))?;
+                    crc.update(text.as_bytes());
+                    WeightsFile::from_json(&text, &path.display().to_string()).map_err(|e| e.to_string())
+                };
+                let friction = friction.iter().map(|f| load(f)).collect::<Result<Vec<_>, _>>()?;
+                let gravity = gravity.as_deref().map(&mut load).transpose()?;
+                Ok(Box::new(compensator::NnCompensatorModel::new(
+                    &self.identifier,
+                    *joints,
+                    &friction,
+                    gravity.as_ref(),
+                    (*enable_friction, *enable_gravity),
+                    crc.finalize(),
+                )?))
+            }
+        }
+    }
+
+    /// Files this spec needs in `resources/`.
+    pub fn resource_files(&self) -> Vec<String> {
+        match &self.model {
+            ModelSpec::PlanarArm { .. } => Vec::new(),
+            ModelSpec::NnCompensator { friction, gravity, .. } => friction.iter().chain(gravity).cloned().collect(),
         }
     }
 
@@ -95,17 +143,32 @@ pub fn instantiate(resources: &Path) -> Result<Box<dyn Model>, String> {
     let path = resources.join(SPEC_FILE);
     let text = std::fs::read_to_string(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let spec = FmuSpec::from_toml(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    spec.build().map_err(|e| format!("{}: {e}", path.display()))
+    spec.build_from(Some(resources)).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-/// Writes the FMU for `spec` to `path` (app builds only: needs the packager).
+/// Writes the FMU for `spec` to `path`, with the files it names taken from `sources` (app
+/// builds only: needs the packager). The files are checked by building the model from them
+/// exactly as the FMU will at instantiation.
 #[cfg(feature = "app")]
-pub fn export_fmu(spec: &FmuSpec, path: &Path) -> Result<(), String> {
-    let model = spec.build()?;
+pub fn export_fmu(spec: &FmuSpec, sources: &[(String, std::path::PathBuf)], path: &Path) -> Result<(), String> {
+    let staging = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
+    let mut resources = vec![(SPEC_FILE.to_owned(), spec.to_toml().into_bytes())];
+    for name in spec.resource_files() {
+        let source = sources.iter().find(|(n, _)| *n == name).map(|(_, p)| p).ok_or_else(|| format!("no source file given for {name}"))?;
+        let bytes = std::fs::read(source).map_err(|e| format!("{}: {e}", source.display()))?;
+        std::fs::write(staging.path().join(&name), &bytes).map_err(|e| format!("staging {name}: {e}"))?;
+        resources.push((name, bytes));
+    }
+    let model = spec.build_from(Some(staging.path())).map_err(|e| {
+        // Name the user's file, not the staging copy.
+        sources.iter().fold(e, |e, (name, p)| e.replace(&staging.path().join(name).display().to_string(), &p.display().to_string()))
+    })?;
     let binary = crate::fmi2::package::find_binary()?;
     let equations = match spec.model {
         ModelSpec::PlanarArm { .. } => planar_arm::EQUATIONS_HTML,
+        ModelSpec::NnCompensator { .. } => compensator::EQUATIONS_HTML,
     };
-    crate::fmi2::package::write_fmu(path, model.description(), &binary, &[(SPEC_FILE, spec.to_toml().into_bytes())], equations)
+    let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
+    crate::fmi2::package::write_fmu(path, model.description(), &binary, &files, equations)
         .map_err(|e| format!("writing {}: {e}", path.display()))
 }
