@@ -22,34 +22,50 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
-/// Solves A x = b for symmetric positive definite A (row-major m×m; its lower triangle is
-/// overwritten by the Cholesky factor L), x replacing b. Returns false, leaving `b`
+/// Solves A x = b for symmetric positive definite A (row-major m×m; its upper triangle is
+/// overwritten by the Cholesky factor U, A = UᵀU), x replacing b. Returns false, leaving `b`
 /// meaningless, if A is not numerically positive definite.
+///
+/// Right-looking, so the inner loops are updates of contiguous rows (axpy), which the
+/// compiler vectorises; only the upper triangle of A is read.
 pub fn cholesky_solve_in_place(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
-    for j in 0..m {
-        let (done, rest) = a.split_at_mut(j * m);
-        let row_j = &mut rest[..m];
-        // L_jk for k < j: (A_jk − Σ_{l<k} L_jl L_kl) / L_kk
-        for k in 0..j {
-            let row_k = &done[k * m..k * m + m];
-            row_j[k] = (row_j[k] - dot(&row_j[..k], &row_k[..k])) / row_k[k];
-        }
-        let d = row_j[j] - dot(&row_j[..j], &row_j[..j]);
+    for k in 0..m {
+        let (head, tail) = a.split_at_mut((k + 1) * m);
+        let row_k = &mut head[k * m..];
+        let d = row_k[k];
         if !(d > 0.0 && d.is_finite()) {
             return false;
         }
-        row_j[j] = d.sqrt();
-    }
-    for i in 0..m {
-        let row = &a[i * m..i * m + i];
-        b[i] = (b[i] - dot(row, &b[..i])) / a[i * m + i];
-    }
-    for i in (0..m).rev() {
-        let mut s = b[i];
-        for k in i + 1..m {
-            s -= a[k * m + i] * b[k];
+        let pivot = d.sqrt();
+        row_k[k] = pivot;
+        let inv = 1.0 / pivot;
+        for v in &mut row_k[k + 1..] {
+            *v *= inv;
         }
-        b[i] = s / a[i * m + i];
+        // Trailing update of the upper triangle: A[i][i..] -= U[k][i] · U[k][i..].
+        for i in k + 1..m {
+            let f = row_k[i];
+            if f != 0.0 {
+                let row_i = &mut tail[(i - k - 1) * m + i..(i - k - 1) * m + m];
+                for (x, u) in row_i.iter_mut().zip(&row_k[i..]) {
+                    *x -= f * u;
+                }
+            }
+        }
+    }
+    // Uᵀ y = b, forward, by columns of Uᵀ (rows of U).
+    for k in 0..m {
+        let row = &a[k * m..k * m + m];
+        b[k] /= row[k];
+        let bk = b[k];
+        for (x, u) in b[k + 1..].iter_mut().zip(&row[k + 1..]) {
+            *x -= bk * u;
+        }
+    }
+    // U x = y, backward.
+    for i in (0..m).rev() {
+        let row = &a[i * m..i * m + m];
+        b[i] = (b[i] - dot(&row[i + 1..], &b[i + 1..])) / row[i];
     }
     true
 }

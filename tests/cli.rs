@@ -191,3 +191,42 @@ fn export_arm_names_the_fmu_after_its_file_and_checks_the_name() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("model identifier 'my-arm'"));
     assert!(!bad.exists());
 }
+
+#[test]
+fn train_and_eval_round_trip_and_report_bad_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("qd_1,tau_1\n");
+    for i in 0..=100 {
+        let v = -5.0 + 0.1 * i as f64;
+        csv += &format!("{v},{}\n", 1.2 * (3.0 * v).tanh() + 0.5 * v);
+    }
+    let data = write(dir.path(), "pairs.csv", &csv);
+    let net = dir.path().join("net.json");
+    let o = neurarm().args(["train", "-d"]).arg(&data).args(["--inputs", "qd_1", "--targets", "tau_1", "--hidden", "6", "-o"]).arg(&net).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let weights = neurarm::nn::WeightsFile::read(&net).unwrap();
+    assert_eq!(weights.inputs[0].unit, "rad/s");
+    assert_eq!(weights.outputs[0].unit, "N.m");
+    // eval writes the library's forward pass.
+    let out = dir.path().join("eval.csv");
+    neurarm().args(["eval", "-n"]).arg(&net).arg("-d").arg(&data).arg("-o").arg(&out).assert().success();
+    let table = NumericTable::read(&out, &["qd_1", "tau_1"]).unwrap();
+    let mlp = weights.network().unwrap();
+    for r in 0..table.rows() {
+        let y = mlp.evaluate(&[table.column("qd_1").unwrap()[r]])[0];
+        assert_eq!(y.to_bits(), table.column("tau_1").unwrap()[r].to_bits());
+    }
+
+    // Bad data: missing column, text in a number; nothing written.
+    let bad = write(dir.path(), "bad.csv", "qd_1,tau_1\n0.1,0.2\n0.2,x\n");
+    let out2 = dir.path().join("net2.json");
+    let o = neurarm().args(["train", "-d"]).arg(&bad).args(["--inputs", "qd_1", "--targets", "tau_1", "-o"]).arg(&out2).output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("bad.csv, line 3, column 2 (tau_1): 'x' is not a number"), "{stderr}");
+    let o = neurarm().args(["train", "-d"]).arg(&data).args(["--inputs", "qd_2", "--targets", "tau_1", "-o"]).arg(&out2).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing column 'qd_2'"));
+    assert!(!out2.exists());
+    let o = neurarm().args(["eval", "-n"]).arg(&data).arg("-d").arg(&data).arg("-o").arg(&out2).output().unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("pairs.csv"));
+    assert!(!out2.exists());
+}

@@ -135,7 +135,7 @@ fn early_stopping_returns_the_best_validation_weights() {
     }
     let settings = TrainSettings { hidden: 30, seed: 4, ..Default::default() };
     let mut history = Vec::new();
-    let trained = train(&x, &t, &settings, &mut |e| history.push(*e)).unwrap();
+    let trained = train(&x, &t, &settings, &mut |e| history.push(e.validation_mse)).unwrap();
     let r = &trained.report;
     assert_eq!(r.stop_reason, StopReason::ValidationFailures, "{r:?}");
     assert_eq!(r.epochs, r.best_epoch + settings.max_fail);
@@ -145,9 +145,9 @@ fn early_stopping_returns_the_best_validation_weights() {
     assert!((recomputed - r.validation_mse.unwrap()).abs() <= 1e-12 * recomputed.max(1e-300));
     // It is the best validation error of the run (the history is in scaled units).
     let scale = trained.net.output_scaling.error_scale(0);
-    let best_seen = history.iter().map(|e| e.validation_mse).fold(f64::INFINITY, f64::min) * scale;
+    let best_seen = history.iter().copied().fold(f64::INFINITY, f64::min) * scale;
     assert!((best_seen - recomputed).abs() <= 1e-9 * recomputed, "best seen {best_seen}, returned {recomputed}");
-    let last = history.last().unwrap().validation_mse * scale;
+    let last = history.last().unwrap() * scale;
     assert!(last > recomputed);
 }
 
