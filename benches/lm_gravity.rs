@@ -32,7 +32,13 @@ fn main() {
     }
     let x = DMatrix::from_fn(4, q.len(), |r, c| q[c][r]);
     let t = DMatrix::from_fn(4, q.len(), |r, c| gravity_torques(&arm, &q[c])[r]);
-    let settings = TrainSettings { hidden: 25, epochs: 1000, max_fail: usize::MAX, ..Default::default() };
+    // trainlm stops at 1000 epochs by default; the bench allows more so that time to the
+    // target error can be measured. No early stopping: all three minimise the training error.
+    // The start matters: from seed 1 trainlm (ours and the numpy loop alike) settles at a test
+    // MSE of 1.1e-4 N²m² and never reaches the target; from seed 2 it does. LM_BENCH_SEED
+    // picks another.
+    let seed = std::env::var("LM_BENCH_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(2);
+    let settings = TrainSettings { hidden: 25, epochs: 3000, max_fail: usize::MAX, min_grad: 1e-12, seed, ..Default::default() };
 
     // The same scaling, split and initial weights the trainer uses, for the Python peers.
     let (sx, st) = (MinMaxScaling::fit(&x), MinMaxScaling::fit(&t));
