@@ -59,3 +59,54 @@ fn guid_changes_with_any_start_value() {
     assert_ne!(a, b);
     assert_eq!(a, FmuSpec::planar_arm("PlanarArm", ArmConfig::default()).description().unwrap().guid());
 }
+
+/// Fixed, formula-made weights (no training, so the file is the same on every machine).
+fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) -> neurarm::nn::WeightsFile {
+    use nalgebra::{DMatrix, DVector};
+    use neurarm::nn::{MinMaxScaling, Mlp, Signal, TrainReport, TrainSettings, WeightsFile};
+    // Exact binary fractions: the same bits on every machine, whatever its libm.
+    let f = |a: usize, b: usize, c: f64| ((a * 7 + b * 3) % 11) as f64 / 8.0 - 0.625 + c;
+    let net = Mlp {
+        iw: DMatrix::from_fn(hidden, n_in, |j, i| f(j, i, 0.125)),
+        b1: DVector::from_fn(hidden, |j, _| f(j, 0, 0.25)),
+        lw: DMatrix::from_fn(n_out, hidden, |k, j| f(k, j, 0.375)),
+        b2: DVector::from_fn(n_out, |k, _| f(k, 0, 0.5)),
+        input_scaling: MinMaxScaling { min: vec![-5.0; n_in], max: vec![5.0; n_in] },
+        output_scaling: MinMaxScaling { min: vec![-2.0; n_out], max: vec![2.0; n_out] },
+    };
+    let sig = |p: &str, u: &str, n: usize| (1..=n).map(|i| Signal { name: format!("{p}_{i}"), unit: u.into() }).collect();
+    let report = TrainReport {
+        epochs: 0,
+        best_epoch: 0,
+        stop_reason: neurarm::nn::StopReason::Epochs,
+        restart: 0,
+        train_mse: 0.0,
+        validation_mse: None,
+        test_mse: None,
+        counts: [0, 0, 0],
+    };
+    WeightsFile::new(&net, sig(names.0, "rad", n_in), sig(names.1, "N.m", n_out), TrainSettings::default(), report)
+}
+
+#[test]
+fn nn_compensator_model_description_has_not_drifted() {
+    use neurarm::models::ModelSpec;
+    let dir = tempfile::tempdir().unwrap();
+    let mut friction = Vec::new();
+    for j in 1..=4 {
+        let name = format!("friction_{j}.json");
+        std::fs::write(dir.path().join(&name), fixed_weights(1, 3, 1, ("qd", "tau")).to_json()).unwrap();
+        friction.push(name);
+    }
+    std::fs::write(dir.path().join("gravity.json"), fixed_weights(4, 5, 4, ("q", "tau")).to_json()).unwrap();
+    let spec = FmuSpec {
+        identifier: "NnCompensator".into(),
+        model: ModelSpec::NnCompensator { joints: 4, friction, gravity: Some("gravity.json".into()), enable_friction: true, enable_gravity: true },
+    };
+    let xml = spec.build_from(Some(dir.path())).unwrap().description().to_xml();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription").join("NnCompensator.xml");
+    if std::env::var_os("NEURARM_UPDATE_MODEL_DESCRIPTIONS").is_some() {
+        std::fs::write(&path, &xml).unwrap();
+    }
+    assert!(std::fs::read_to_string(&path).unwrap_or_default() == xml, "{} differs from the generated description", path.display());
+}

@@ -8,8 +8,9 @@
 //! same per-sample vector z = (1 − a²) ⊗ [x; 1] scaled per output by the layer weights. So
 //! the hidden block of JᵀJ is (ZᵀZ) ⊙ (LWᵀLW ⊗ 1), one Gram matrix of the Q×H(N+1) matrix Z
 //! instead of K of them; each output's block is the same ÃÃᵀ (Ã = [a; 1]), and the cross
-//! blocks are rows of ZᵀÃᵀ scaled by the layer weights. All buffers are made once per
-//! training; an epoch allocates nothing.
+//! blocks are rows of ZᵀÃᵀ scaled by the layer weights. All three come out of one Gram
+//! matrix of the rows [z; ã]. All buffers are made once per training; the only allocation in
+//! an epoch is the GEMM library's (matrixmultiply) packing buffer, once per epoch.
 //!
 //! Training works on scaled data (inputs and targets in [-1, 1]); the reported errors are
 //! mean squared errors in the targets' own units.
@@ -196,10 +197,9 @@ struct Workspace {
     /// Whether `a` holds the activations of the current parameters on the training part.
     a_current: bool,
     e: Vec<f64>,
-    z: Vec<f64>,
-    ztz: Vec<f64>,
-    zta: Vec<f64>,
-    ata: Vec<f64>,
+    /// Rows [z; ã] per sample (width `ph + h + 1`): one Gram matrix gives ZᵀZ, ZᵀÃᵀ and ÃÃᵀ.
+    w: Vec<f64>,
+    gram: Vec<f64>,
     m: Vec<f64>,
     jtj: Vec<f64>,
     work: Vec<f64>,
@@ -223,10 +223,8 @@ impl Workspace {
             a_trial: vec![0.0; q * (h + 1)],
             a_current: false,
             e: vec![0.0; q * k],
-            z: vec![0.0; q * ph],
-            ztz: vec![0.0; ph * ph],
-            zta: vec![0.0; ph * (h + 1)],
-            ata: vec![0.0; (h + 1) * (h + 1)],
+            w: vec![0.0; q * (ph + h + 1)],
+            gram: vec![0.0; (ph + h + 1) * (ph + h + 1)],
             m: vec![0.0; h * h],
             jtj: vec![0.0; p * p],
             work: vec![0.0; p * p],
@@ -306,6 +304,7 @@ impl Workspace {
     fn linearise(&mut self, theta: &[f64], part: &Part) {
         let (n, h, k, ph, p) = (self.n, self.h, self.k, self.ph, self.p);
         let q = part.count;
+        let pw = ph + h + 1;
         for s in 0..q {
             let x = &part.x[s * (n + 1)..(s + 1) * (n + 1)];
             let a = &mut self.a[s * (h + 1)..(s + 1) * (h + 1)];
@@ -318,24 +317,25 @@ impl Workspace {
                 let y: f64 = theta[base..base + h + 1].iter().zip(a.iter()).map(|(w, v)| w * v).sum();
                 self.e[s * k + o] = part.t[s * k + o] - y;
             }
-            // z = (1 − a²) ⊗ x̃
-            let z = &mut self.z[s * ph..(s + 1) * ph];
+            // Row s of W: z = (1 − a²) ⊗ x̃, then ã.
+            let row = &mut self.w[s * pw..(s + 1) * pw];
             for j in 0..h {
                 let d = 1.0 - a[j] * a[j];
                 for i in 0..=n {
-                    z[j * (n + 1) + i] = d * x[i];
+                    row[j * (n + 1) + i] = d * x[i];
                 }
             }
+            row[ph..].copy_from_slice(a);
         }
-        // SAFETY: the slices hold exactly the strided matrices described (see module docs).
+        // SAFETY: `w` holds the q×pw row-major matrix W and `gram` has room for pw×pw.
         unsafe {
-            // ZᵀZ (ph×ph), ZᵀÃᵀ (ph×(h+1)), ÃÃᵀ ((h+1)×(h+1)); Z is q×ph, Ã is q×(h+1), row-major.
-            let (zp, ap) = (self.z.as_ptr(), self.a.as_ptr());
-            let (phi, hi) = (ph as isize, (h + 1) as isize);
-            matrixmultiply::dgemm(ph, q, ph, 1.0, zp, 1, phi, zp, phi, 1, 0.0, self.ztz.as_mut_ptr(), phi, 1);
-            matrixmultiply::dgemm(ph, q, h + 1, 1.0, zp, 1, phi, ap, hi, 1, 0.0, self.zta.as_mut_ptr(), hi, 1);
-            matrixmultiply::dgemm(h + 1, q, h + 1, 1.0, ap, 1, hi, ap, hi, 1, 0.0, self.ata.as_mut_ptr(), hi, 1);
+            let (wp, pwi) = (self.w.as_ptr(), pw as isize);
+            matrixmultiply::dgemm(pw, q, pw, 1.0, wp, 1, pwi, wp, pwi, 1, 0.0, self.gram.as_mut_ptr(), pwi, 1);
         }
+        let gram = &self.gram;
+        let ztz = |r: usize, c: usize| gram[r * pw + c];
+        let zta = |r: usize, m: usize| gram[r * pw + ph + m];
+        let ata = |m: usize, m2: usize| gram[(ph + m) * pw + ph + m2];
         // M = LWᵀLW over the hidden columns.
         let lw = |o: usize, j: usize| theta[ph + o * (h + 1) + j];
         for j in 0..h {
@@ -347,13 +347,13 @@ impl Workspace {
         for r in 0..ph {
             let j = r / (n + 1);
             for c in 0..ph {
-                jtj[r * p + c] = self.ztz[r * ph + c] * self.m[j * h + c / (n + 1)];
+                jtj[r * p + c] = ztz(r, c) * self.m[j * h + c / (n + 1)];
             }
             for o in 0..k {
                 let w = lw(o, j);
                 for mm in 0..=h {
                     let col = ph + o * (h + 1) + mm;
-                    let v = w * self.zta[r * (h + 1) + mm];
+                    let v = w * zta(r, mm);
                     jtj[r * p + col] = v;
                     jtj[col * p + r] = v;
                 }
@@ -364,7 +364,7 @@ impl Workspace {
                 for mm in 0..=h {
                     let row = ph + o * (h + 1) + mm;
                     for m2 in 0..=h {
-                        jtj[row * p + ph + oo * (h + 1) + m2] = if o == oo { self.ata[mm * (h + 1) + m2] } else { 0.0 };
+                        jtj[row * p + ph + oo * (h + 1) + m2] = if o == oo { ata(mm, m2) } else { 0.0 };
                     }
                 }
             }
