@@ -333,7 +333,6 @@ impl Workspace {
             matrixmultiply::dgemm(pw, q, pw, 1.0, wp, 1, pwi, wp, pwi, 1, 0.0, self.gram.as_mut_ptr(), pwi, 1);
         }
         let gram = &self.gram;
-        let ztz = |r: usize, c: usize| gram[r * pw + c];
         let zta = |r: usize, m: usize| gram[r * pw + ph + m];
         let ata = |m: usize, m2: usize| gram[(ph + m) * pw + ph + m2];
         // M = LWᵀLW over the hidden columns.
@@ -346,8 +345,13 @@ impl Workspace {
         let jtj = &mut self.jtj;
         for r in 0..ph {
             let j = r / (n + 1);
-            for c in 0..ph {
-                jtj[r * p + c] = ztz(r, c) * self.m[j * h + c / (n + 1)];
+            let (out, src) = (&mut jtj[r * p..r * p + ph], &gram[r * pw..r * pw + ph]);
+            for jj in 0..h {
+                let mjj = self.m[j * h + jj];
+                let span = jj * (n + 1)..(jj + 1) * (n + 1);
+                for (o, g) in out[span.clone()].iter_mut().zip(&src[span]) {
+                    *o = g * mjj;
+                }
             }
             for o in 0..k {
                 let w = lw(o, j);
@@ -360,12 +364,13 @@ impl Workspace {
             }
         }
         for o in 0..k {
-            for oo in 0..k {
-                for mm in 0..=h {
-                    let row = ph + o * (h + 1) + mm;
-                    for m2 in 0..=h {
-                        jtj[row * p + ph + oo * (h + 1) + m2] = if o == oo { ata(mm, m2) } else { 0.0 };
-                    }
+            for mm in 0..=h {
+                let row = ph + o * (h + 1) + mm;
+                let out = &mut jtj[row * p + ph..row * p + p];
+                out.fill(0.0);
+                let block = &mut out[o * (h + 1)..(o + 1) * (h + 1)];
+                for (m2, v) in block.iter_mut().enumerate() {
+                    *v = ata(mm, m2);
                 }
             }
         }
