@@ -209,6 +209,20 @@ pub struct ModelDescription {
 }
 
 impl ModelDescription {
+    /// A checked description of the model `identifier` (also its name) with the project's
+    /// default experiment: 0 to 10 s at a 1 ms communication step.
+    pub fn new(identifier: &str, description: String, variables: Vec<Variable>) -> Result<Self, String> {
+        let d = Self {
+            model_name: identifier.to_owned(),
+            model_identifier: identifier.to_owned(),
+            description,
+            default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 10.0, step_size: 1e-3 },
+            variables,
+        };
+        d.check()?;
+        Ok(d)
+    }
+
     /// The GUID: a UUID (v5) of the model description with an empty GUID, so any change of
     /// the interface or of a start value gives a new one.
     pub fn guid(&self) -> String {

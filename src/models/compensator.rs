@@ -8,7 +8,7 @@
 //! outputs follow the inputs at once (direct feedthrough), steps change nothing.
 
 use crate::fmi2::codec::Reader;
-use crate::fmi2::description::{Causality, DefaultExperiment, Kind, ModelDescription, TableBuilder, Variability};
+use crate::fmi2::description::{Causality, Kind, ModelDescription, TableBuilder, Variability};
 use crate::fmi2::model::{Model, Values};
 use crate::nn::{Mlp, WeightsFile};
 
@@ -102,14 +102,8 @@ impl NnCompensatorModel {
             (true, false) => "friction",
             _ => "gravity",
         };
-        let description = ModelDescription {
-            model_name: identifier.to_owned(),
-            model_identifier: identifier.to_owned(),
-            description: format!("NN compensator of {parts} torques for {joints} joints (neurarm; weights crc32 {fingerprint:08x})"),
-            default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 10.0, step_size: 1e-3 },
-            variables: b.finish(),
-        };
-        description.check()?;
+        let text = format!("NN compensator of {parts} torques for {joints} joints (neurarm; weights crc32 {fingerprint:08x})");
+        let description = ModelDescription::new(identifier, text, b.finish())?;
         let widest = friction.iter().chain(&gravity).map(Mlp::hidden).max().unwrap_or(1);
         Ok(Self {
             description,

@@ -9,7 +9,7 @@
 use crate::arm::{end_effector_state, ArmSimulator, ArmState, FrictionBranch, Sensors};
 use crate::config::ArmConfig;
 use crate::fmi2::codec::{Put, Reader};
-use crate::fmi2::description::{Causality, DefaultExperiment, Kind, ModelDescription, TableBuilder, Variability};
+use crate::fmi2::description::{Causality, Kind, ModelDescription, TableBuilder, Variability};
 use crate::fmi2::model::{Model, Values};
 
 /// A real parameter of one joint: FMU name prefix (the variable is `{name}_{i}`), unit,
@@ -210,14 +210,7 @@ fn table(identifier: &str, config: &ArmConfig, initial: &ArmState) -> Result<(Mo
     let qd0 = joints(&mut |i| b.parameter(format!("qd0_{}", i + 1), "rad/s", initial.qd[i], format!("Initial velocity of joint {}", i + 1)));
     let arm_params = ARM_PARAMETERS.iter().map(|p| b.parameter(p.name, p.unit, (p.get)(config), p.description)).collect();
     let seed = b.push("noise_seed", Causality::Parameter, Variability::Fixed, Kind::Integer { start: Some(seed) }, "Seed of the measurement noise");
-    let description = ModelDescription {
-        model_name: identifier.to_owned(),
-        model_identifier: identifier.to_owned(),
-        description: format!("Planar {n}-R arm with joint friction (neurarm)"),
-        default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 10.0, step_size: 1e-3 },
-        variables: b.finish(),
-    };
-    description.check()?;
+    let description = ModelDescription::new(identifier, format!("Planar {n}-R arm with joint friction (neurarm)"), b.finish())?;
     Ok((description, Layout { tau, q, qd, ee, q_meas, qd_meas, joint_params, q0, qd0, arm_params, seed }))
 }
 
