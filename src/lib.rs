@@ -8,6 +8,7 @@
 
 pub mod arm;
 pub mod config;
+pub mod control;
 pub mod fmi2;
 pub mod linalg;
 pub mod models;
