@@ -150,6 +150,13 @@ fn csv_cause(e: &csv::Error) -> String {
     }
 }
 
+/// Permissions of the files we write: read-write for the owner, readable by others (as a
+/// plain `create` under the usual umask would give), not the temporary file's 0600.
+pub(crate) fn readable_file() -> std::fs::Permissions {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::Permissions::from_mode(0o644)
+}
+
 /// Writes `text` to `path` atomically: a temporary file beside it is renamed over `path` once
 /// complete, so a failure leaves no partial file.
 pub fn write_text_atomic(path: &Path, text: &str) -> std::io::Result<()> {
@@ -157,7 +164,7 @@ pub fn write_text_atomic(path: &Path, text: &str) -> std::io::Result<()> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::Builder::new().prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
+    let mut tmp = tempfile::Builder::new().permissions(readable_file()).prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
     tmp.write_all(text.as_bytes())?;
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
@@ -172,7 +179,7 @@ pub fn write_atomic(path: &Path, names: &[String], rows: impl Iterator<Item = Ve
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::Builder::new().prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
+    let mut tmp = tempfile::Builder::new().permissions(readable_file()).prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
     {
         let mut out = std::io::BufWriter::new(tmp.as_file_mut());
         writeln!(out, "{}", names.join(","))?;

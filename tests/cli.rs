@@ -230,3 +230,20 @@ fn train_and_eval_round_trip_and_report_bad_data() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("pairs.csv"));
     assert!(!out2.exists());
 }
+
+#[test]
+fn written_files_are_readable_by_others() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let input = write(dir.path(), "tau.csv", &good_csv());
+    let out = dir.path().join("traj.csv");
+    neurarm().args(["simulate", "-t"]).arg(&input).arg("-o").arg(&out).assert().success();
+    let fmu = dir.path().join("Arm.fmu");
+    neurarm().args(["export", "arm", "-o"]).arg(&fmu).assert().success();
+    // What a plain create would give: 0644 less the process umask (Linux reports it here).
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let umask = status.lines().find_map(|l| l.strip_prefix("Umask:")).map(|u| u32::from_str_radix(u.trim(), 8).unwrap()).unwrap_or(0o022);
+    for f in [out, fmu] {
+        assert_eq!(std::fs::metadata(&f).unwrap().permissions().mode() & 0o777, 0o644 & !umask, "{}", f.display());
+    }
+}

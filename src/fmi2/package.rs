@@ -5,6 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::description::{Causality, Kind, ModelDescription};
+use crate::table::readable_file;
 
 /// File name of the FMU binary that `cargo build --release` makes.
 pub const BINARY_NAME: &str = "libneurarm_fmu.so";
@@ -45,7 +46,7 @@ pub fn write_fmu(
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let tmp = tempfile::Builder::new().prefix(".neurarm-").suffix(".fmu.tmp").tempfile_in(dir)?;
+    let tmp = tempfile::Builder::new().permissions(readable_file()).prefix(".neurarm-").suffix(".fmu.tmp").tempfile_in(dir)?;
     let mut zip = zip::ZipWriter::new(tmp.reopen()?);
     let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     let exe_options = options.unix_permissions(0o755);
