@@ -151,6 +151,7 @@ pub fn resource_folder(uri: &str) -> Result<PathBuf, String> {
 ///
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
+#[allow(clippy::too_many_arguments)] // mirrors fmi2Instantiate's C signature
 pub unsafe fn instantiate(
     factory: ModelFactory,
     instance_name: *const c_char,

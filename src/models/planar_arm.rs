@@ -186,7 +186,7 @@ fn table(identifier: &str, config: &ArmConfig, initial: &ArmState) -> Result<(Mo
     let n = config.arm.dof();
     let seed = i32::try_from(config.hardware.seed).map_err(|_| format!("noise seed {} does not fit an FMI Integer", config.hardware.seed))?;
     let mut b = TableBuilder::new();
-    let joints = |f: &mut dyn FnMut(usize) -> u32| (0..n).map(|i| f(i)).collect::<Vec<u32>>();
+    let joints = |f: &mut dyn FnMut(usize) -> u32| (0..n).map(f).collect::<Vec<u32>>();
     let tau = joints(&mut |i| b.input(format!("tau_{}", i + 1), "N.m", 0.0, format!("Torque command of joint {}", i + 1)));
     let q = joints(&mut |i| b.output(format!("q_{}", i + 1), "rad", format!("Angle of joint {} relative to link {}", i + 1, i), &[]));
     let qd = joints(&mut |i| b.output(format!("qd_{}", i + 1), "rad/s", format!("Velocity of joint {}", i + 1), &[]));
