@@ -81,6 +81,19 @@ macro_rules! friction {
     };
 }
 
+/// The viscous fall-off of one direction: 0 in the FMU stands for "linear" (`None`).
+macro_rules! falloff {
+    ($name:literal, $desc:literal, $positive:expr) => {
+        JointParameter {
+            name: $name,
+            unit: "rad/s",
+            description: $desc,
+            get: |c, i| branch_ref(c, i, $positive).viscous_falloff_rad_s.unwrap_or(0.0),
+            set: |c, i, v| branch(c, i, $positive).viscous_falloff_rad_s = (v != 0.0).then_some(v),
+        }
+    };
+}
+
 /// Parameters of each joint, in table order; the FMU variable of joint i is `{name}_{i}`.
 pub const JOINT_PARAMETERS: [JointParameter; 16] = [
     JointParameter { name: "length", unit: "m", description: "Length of link {}", get: |c, i| c.arm.links[i].length_m, set: |c, i, v| c.arm.links[i].length_m = v },
@@ -103,24 +116,12 @@ pub const JOINT_PARAMETERS: [JointParameter; 16] = [
     friction!("static_pos", "N.m", "Static (breakaway) friction of joint {}, positive velocity", true, static_nm),
     friction!("stribeck_velocity_pos", "rad/s", "Stribeck velocity of joint {}, positive velocity", true, stribeck_velocity_rad_s),
     friction!("viscous_pos", "N.m.s/rad", "Viscous friction coefficient of joint {} at low speed, positive velocity", true, viscous_nms_rad),
-    JointParameter {
-        name: "viscous_falloff_pos",
-        unit: "rad/s",
-        description: "Speed at which the viscous slope of joint {} has halved, positive velocity (0: linear)",
-        get: |c, i| branch_ref(c, i, true).viscous_falloff_rad_s.unwrap_or(0.0),
-        set: |c, i, v| branch(c, i, true).viscous_falloff_rad_s = (v != 0.0).then_some(v),
-    },
+    falloff!("viscous_falloff_pos", "Speed at which the viscous slope of joint {} has halved, positive velocity (0: linear)", true),
     friction!("coulomb_neg", "N.m", "Coulomb friction of joint {}, negative velocity (magnitude)", false, coulomb_nm),
     friction!("static_neg", "N.m", "Static (breakaway) friction of joint {}, negative velocity (magnitude)", false, static_nm),
     friction!("stribeck_velocity_neg", "rad/s", "Stribeck velocity of joint {}, negative velocity", false, stribeck_velocity_rad_s),
     friction!("viscous_neg", "N.m.s/rad", "Viscous friction coefficient of joint {} at low speed, negative velocity", false, viscous_nms_rad),
-    JointParameter {
-        name: "viscous_falloff_neg",
-        unit: "rad/s",
-        description: "Speed at which the viscous slope of joint {} has halved, negative velocity (0: linear)",
-        get: |c, i| branch_ref(c, i, false).viscous_falloff_rad_s.unwrap_or(0.0),
-        set: |c, i, v| branch(c, i, false).viscous_falloff_rad_s = (v != 0.0).then_some(v),
-    },
+    falloff!("viscous_falloff_neg", "Speed at which the viscous slope of joint {} has halved, negative velocity (0: linear)", false),
     JointParameter {
         name: "torque_limit",
         unit: "N.m",
