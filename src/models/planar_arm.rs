@@ -94,6 +94,22 @@ macro_rules! falloff {
     };
 }
 
+/// A per-joint entry of an optional hardware list, 0 standing for "off" for that joint.
+macro_rules! hardware_entry {
+    ($name:literal, $unit:literal, $desc:literal, $field:ident) => {
+        JointParameter {
+            name: $name,
+            unit: $unit,
+            description: $desc,
+            get: |c, i| optional_entry(&c.hardware.$field, i),
+            set: |c, i, v| {
+                let n = c.arm.links.len();
+                set_optional_entry(&mut c.hardware.$field, n, i, v)
+            },
+        }
+    };
+}
+
 /// Parameters of each joint, in table order; the FMU variable of joint i is `{name}_{i}`.
 pub const JOINT_PARAMETERS: [JointParameter; 16] = [
     JointParameter { name: "length", unit: "m", description: "Length of link {}", get: |c, i| c.arm.links[i].length_m, set: |c, i, v| c.arm.links[i].length_m = v },
@@ -122,26 +138,8 @@ pub const JOINT_PARAMETERS: [JointParameter; 16] = [
     friction!("stribeck_velocity_neg", "rad/s", "Stribeck velocity of joint {}, negative velocity", false, stribeck_velocity_rad_s),
     friction!("viscous_neg", "N.m.s/rad", "Viscous friction coefficient of joint {} at low speed, negative velocity", false, viscous_nms_rad),
     falloff!("viscous_falloff_neg", "Speed at which the viscous slope of joint {} has halved, negative velocity (0: linear)", false),
-    JointParameter {
-        name: "torque_limit",
-        unit: "N.m",
-        description: "Largest torque motor {} can apply (0: no limit)",
-        get: |c, i| optional_entry(&c.hardware.torque_limit_nm, i),
-        set: |c, i, v| {
-            let n = c.arm.links.len();
-            set_optional_entry(&mut c.hardware.torque_limit_nm, n, i, v)
-        },
-    },
-    JointParameter {
-        name: "encoder_counts",
-        unit: "",
-        description: "Encoder counts per revolution of joint {} (0: exact angles)",
-        get: |c, i| optional_entry(&c.hardware.encoder_counts_per_rev, i),
-        set: |c, i, v| {
-            let n = c.arm.links.len();
-            set_optional_entry(&mut c.hardware.encoder_counts_per_rev, n, i, v)
-        },
-    },
+    hardware_entry!("torque_limit", "N.m", "Largest torque motor {} can apply (0: no limit)", torque_limit_nm),
+    hardware_entry!("encoder_counts", "", "Encoder counts per revolution of joint {} (0: exact angles)", encoder_counts_per_rev),
 ];
 
 /// Parameters of the whole arm, in table order.
