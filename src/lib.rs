@@ -17,3 +17,5 @@ pub mod nn;
 pub mod simulate;
 #[cfg(feature = "app")]
 pub mod table;
+#[cfg(feature = "app")]
+pub mod master;

@@ -164,6 +164,9 @@ pub const UNITS: &[UnitDef] = &[
     UnitDef { name: "rad/s", exponents: [0, 0, -1, 1] },
     UnitDef { name: "N.m", exponents: [1, 2, -2, 0] },
     UnitDef { name: "N.m.s/rad", exponents: [1, 2, -1, -1] },
+    UnitDef { name: "N.m/rad", exponents: [1, 2, -2, -1] },
+    UnitDef { name: "1/s", exponents: [0, 0, -1, 0] },
+    UnitDef { name: "1/s2", exponents: [0, 0, -2, 0] },
 ];
 
 /// A log category the model declares.

@@ -361,7 +361,14 @@ impl Instance {
 
     fn refresh(&mut self, function: &str) -> Result<(), Status> {
         if self.dirty && self.phase != Phase::Instantiated {
-            if let Err(e) = self.model.update_outputs(&mut self.values) {
+            // In initialization mode the outputs are initial unknowns: computed by the same
+            // initialisation that leaving the mode runs, from the values set so far.
+            let computed = if self.phase == Phase::InitializationMode {
+                self.model.initialize(&mut self.values, self.start_time)
+            } else {
+                self.model.update_outputs(&mut self.values)
+            };
+            if let Err(e) = computed {
                 return Err(self.error(&format!("{function}: {e}")));
             }
             self.dirty = false;

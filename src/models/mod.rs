@@ -6,13 +6,16 @@
 //! XML that do not belong together are refused at instantiation.
 
 pub mod compensator;
+pub mod controllers;
 pub mod planar_arm;
+pub mod signals;
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::arm::ArmState;
+use crate::arm::{ArmParams, ArmState};
+use crate::control::TaskSpaceGains;
 use crate::config::ArmConfig;
 use crate::fmi2::description::ModelDescription;
 use crate::fmi2::model::Model;
@@ -47,6 +50,47 @@ pub enum ModelSpec {
         /// Start value of the `enable_gravity` parameter.
         enable_gravity: bool,
     },
+    /// Task-space computed-torque controller with the paper's reference.
+    TaskSpaceController {
+        /// The controller's model of the arm (its friction is not used).
+        model: ArmParams,
+        /// Default gains.
+        gains: TaskSpaceGains,
+        /// Default centre of the reference [m].
+        centre: [f64; 2],
+        /// Start values of the angle inputs [rad]: a pose where J has full rank.
+        q_start: Vec<f64>,
+    },
+    /// Joint-space P(D) controller with a compensation input.
+    JointController {
+        /// Number of joints.
+        joints: usize,
+        /// Default position gain of every joint [N·m/rad].
+        kp: f64,
+        /// Default velocity gain of every joint [N·m·s/rad].
+        kd: f64,
+        /// Default of `use_sequence`.
+        use_sequence: bool,
+    },
+    /// The true friction and gravity of an arm, as a compensator.
+    IdealCompensator {
+        /// The arm.
+        arm: ArmParams,
+        /// Start value of `enable_friction`.
+        enable_friction: bool,
+        /// Start value of `enable_gravity`.
+        enable_gravity: bool,
+    },
+    /// Test block y' = u.
+    Integrator {
+        /// Start value of y0.
+        y0: f64,
+    },
+    /// Test block y = k u.
+    Gain {
+        /// Start value of k.
+        k: f64,
+    },
 }
 
 /// The content of `resources/neurarm.toml`.
@@ -80,6 +124,17 @@ impl FmuSpec {
                 config.clone(),
                 ArmState { q: q0.clone(), qd: qd0.clone() },
             )?)),
+            ModelSpec::TaskSpaceController { model, gains, centre, q_start } => {
+                Ok(Box::new(controllers::TaskSpaceControllerModel::new(&self.identifier, model.clone(), *gains, *centre, q_start)?))
+            }
+            ModelSpec::JointController { joints, kp, kd, use_sequence } => {
+                Ok(Box::new(controllers::JointControllerModel::new(&self.identifier, *joints, *kp, *kd, *use_sequence)?))
+            }
+            ModelSpec::IdealCompensator { arm, enable_friction, enable_gravity } => {
+                Ok(Box::new(controllers::IdealCompensatorModel::new(&self.identifier, arm.clone(), (*enable_friction, *enable_gravity))?))
+            }
+            ModelSpec::Integrator { y0 } => Ok(Box::new(signals::IntegratorModel::new(&self.identifier, *y0)?)),
+            ModelSpec::Gain { k } => Ok(Box::new(signals::GainModel::new(&self.identifier, *k)?)),
             ModelSpec::NnCompensator { joints, friction, gravity, enable_friction, enable_gravity } => {
                 let dir = resources.ok_or("the compensator reads its weights from resources/, and none was given")?;
                 let mut crc = crc32fast::Hasher::new();
@@ -106,8 +161,8 @@ impl FmuSpec {
     /// Files this spec needs in `resources/`.
     pub fn resource_files(&self) -> Vec<String> {
         match &self.model {
-            ModelSpec::PlanarArm { .. } => Vec::new(),
             ModelSpec::NnCompensator { friction, gravity, .. } => friction.iter().chain(gravity).cloned().collect(),
+            _ => Vec::new(),
         }
     }
 
@@ -167,6 +222,11 @@ pub fn export_fmu(spec: &FmuSpec, sources: &[(String, std::path::PathBuf)], path
     let equations = match spec.model {
         ModelSpec::PlanarArm { .. } => planar_arm::EQUATIONS_HTML,
         ModelSpec::NnCompensator { .. } => compensator::EQUATIONS_HTML,
+        ModelSpec::TaskSpaceController { .. } => controllers::TASK_SPACE_HTML,
+        ModelSpec::JointController { .. } => controllers::JOINT_HTML,
+        ModelSpec::IdealCompensator { .. } => controllers::IDEAL_HTML,
+        ModelSpec::Integrator { .. } => signals::INTEGRATOR_HTML,
+        ModelSpec::Gain { .. } => signals::GAIN_HTML,
     };
     let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
     crate::fmi2::package::write_fmu(path, model.description(), &binary, &files, equations)
