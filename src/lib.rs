@@ -19,3 +19,7 @@ pub mod simulate;
 pub mod table;
 #[cfg(feature = "app")]
 pub mod master;
+#[cfg(feature = "app")]
+pub mod report;
+#[cfg(feature = "app")]
+pub mod experiments;

@@ -30,15 +30,35 @@ enum Command {
     /// [N·m]; each row's torque is held until the next row. The output has one row per input
     /// time: time, q_i [rad], qd_i [rad/s], x, y [m], xd, yd [m/s], tau_i, and q_meas_i,
     /// qd_meas_i when the configuration adds hardware-like effects.
+    ///
+    /// Given a system file instead (`neurarm simulate system.toml -o out.csv`), runs the
+    /// described co-simulation of FMUs through the master and writes the recorded variables;
+    /// if a unit fails mid-run, the rows recorded so far are written and the error reported.
     Simulate {
+        /// A system file (TOML: [[fmu]], [[connection]], [simulation]) to run instead of the arm.
+        system: Option<PathBuf>,
         /// Torque input CSV.
-        #[arg(long, short = 't')]
-        torque: PathBuf,
+        #[arg(long, short = 't', conflicts_with = "system", required_unless_present = "system")]
+        torque: Option<PathBuf>,
         #[command(flatten)]
         arm: ArmSource,
         /// Output trajectory CSV; written only if the whole simulation succeeds.
         #[arg(long, short = 'o')]
         output: PathBuf,
+    },
+    /// Run the paper's experiments end to end through the master and the FMUs: friction and
+    /// gravity identification, training, Table 1, gravity compensation; writes the FMUs, data,
+    /// nets, plots and report.md to the output folder.
+    Paper {
+        /// Output folder.
+        #[arg(long, short = 'o', default_value = "out")]
+        output: PathBuf,
+        /// A reduced run (3⁴ gravity grid, coarse friction levels, one period of tracking).
+        #[arg(long)]
+        quick: bool,
+        /// Worker threads (default: the cores, at most 4).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig,
@@ -167,7 +187,32 @@ fn initial_vector(name: &str, given: Option<Vec<f64>>, n: usize) -> Result<Vec<f
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Simulate { torque, arm, output } => {
+        Command::Simulate { system: Some(system), output, .. } => {
+            let text = std::fs::read_to_string(&system).with_context(|| format!("reading {}", system.display()))?;
+            let spec = neurarm::master::SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
+            let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+            let outcome = neurarm::master::run(&spec, base).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
+            write_atomic(&output, &outcome.columns, outcome.rows.iter().cloned()).with_context(|| format!("writing {}", output.display()))?;
+            match outcome.error {
+                None => eprintln!("wrote {} rows to {}", outcome.rows.len(), output.display()),
+                Some(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", outcome.rows.len(), output.display()),
+            }
+        }
+        Command::Paper { output, quick, threads } => {
+            let mut settings = if quick { neurarm::experiments::Settings::quick() } else { neurarm::experiments::Settings::paper() };
+            if let Some(t) = threads {
+                settings.threads = t.max(1);
+            }
+            let r = neurarm::experiments::paper::run_paper(&output, &settings, &mut |line| eprintln!("[paper] {line}")).map_err(anyhow::Error::msg)?;
+            let t = r.table_1;
+            eprintln!(
+                "Table 1 MSE [m²]: sim perfect {:.3e}, NN {:.3e}, none {:.3e}; real NN {:.3e}, none {:.3e}\nratios: sim NN/perfect {:.3}, none/perfect {:.1}; real NN/none {:.3}",
+                t[0], t[1], t[2], t[3], t[4], t[1] / t[0], t[2] / t[0], t[3] / t[4]
+            );
+            eprintln!("wrote {}", output.join("report.md").display());
+        }
+        Command::Simulate { torque, arm, output, .. } => {
+            let torque = torque.expect("clap requires --torque without a system file");
             let (config, initial) = arm.load()?;
             let input = TorqueInput::read_csv(&torque, config.arm.dof())?;
             let trajectory = simulate(&config, &initial, &input)?;

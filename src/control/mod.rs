@@ -84,3 +84,22 @@ pub fn computed_torque(model: &ArmParams, q: &[f64], qd: &[f64], u: &DVector<f64
 pub fn joint_p_torque(q: &[f64], q_target: &[f64], kp: f64, gravity_comp: &[f64]) -> DVector<f64> {
     DVector::from_fn(q.len(), |i, _| gravity_comp[i] + kp * (q_target[i] - q[i]))
 }
+
+/// Joint angles [rad] that put the end effector at `target` [m], found by Newton steps with
+/// the pseudo-inverse from `seed` (so the answer is the solution reached by the smallest
+/// joint motion from there, to first order). `None` if it does not converge to 1e-12 m or
+/// meets a singular pose.
+pub fn inverse_kinematics(model: &ArmParams, target: Vector2<f64>, seed: &[f64]) -> Option<Vec<f64>> {
+    let mut q = seed.to_vec();
+    for _ in 0..100 {
+        let e = target - crate::arm::end_effector_position(model, &q);
+        if e.norm() < 1e-12 {
+            return Some(q);
+        }
+        let step = pseudo_inverse(&jacobian(model, &q))? * DVector::from_column_slice(e.as_slice());
+        for (qi, d) in q.iter_mut().zip(step.iter()) {
+            *qi += d;
+        }
+    }
+    None
+}

@@ -20,6 +20,7 @@
 
 mod capture;
 mod spec;
+pub mod ssp;
 
 use std::collections::HashMap;
 use std::fmt;
@@ -765,6 +766,48 @@ impl Simulation {
         self.resolve_dirty(Some(self.time))
     }
 
+    /// A handle on a Real variable ("unit.variable") for fast reads with [`Self::get_reals`]
+    /// and, if it is an unconnected input or a tunable parameter, writes with [`Self::set_reals`].
+    pub fn real_handle(&self, full: &str) -> Result<Handle, MasterError> {
+        let (u, v) = split_name(full)?;
+        let ui = self.system.unit_index(u)?;
+        let info = self.system.units[ui].variable(v)?;
+        if info.base != BaseType::Real {
+            return Err(MasterError::new(format!("type mismatch: {:?}, not Real", info.base)).unit(u).variable(v));
+        }
+        let connected = self.system.links.iter().any(|l| l.to_unit == ui && l.to_vr == info.value_reference && l.base == BaseType::Real);
+        let settable = matches!(info.causality, "input" | "parameter") && !connected;
+        Ok(Handle { unit: ui, value_reference: info.value_reference, settable })
+    }
+
+    /// Sets Real inputs or tunable parameters between steps and passes the effect on.
+    pub fn set_reals(&mut self, handles: &[Handle], values: &[f64]) -> Result<(), MasterError> {
+        assert_eq!(handles.len(), values.len(), "one value per handle");
+        for (h, &x) in handles.iter().zip(values) {
+            let unit = &mut self.system.units[h.unit];
+            if !h.settable {
+                return Err(MasterError::new("not settable: a connected input, an output or a local").unit(&unit.name).at(self.time));
+            }
+            let mark = capture::mark();
+            unit.instance.set_real(&[h.value_reference], &[x]).map_err(|e| unit.fail("fmi2SetReal", e, mark, Some(self.time)))?;
+            self.plan.dirty[h.unit] = true;
+        }
+        self.resolve_dirty(Some(self.time))
+    }
+
+    /// Reads Real variables through handles.
+    pub fn get_reals(&mut self, handles: &[Handle], out: &mut [f64]) -> Result<(), MasterError> {
+        assert_eq!(handles.len(), out.len(), "one slot per handle");
+        for (h, o) in handles.iter().zip(out.iter_mut()) {
+            let unit = &mut self.system.units[h.unit];
+            let mut x = [0.0];
+            let mark = capture::mark();
+            unit.instance.get_real(&[h.value_reference], &mut x).map_err(|e| unit.fail("fmi2GetReal", e, mark, Some(self.time)))?;
+            *o = x[0];
+        }
+        Ok(())
+    }
+
     /// Column names of the recording: "time", then the recorded variables.
     pub fn columns(&self) -> Vec<String> {
         std::iter::once("time".to_owned()).chain(self.columns.iter().cloned()).collect()
@@ -789,6 +832,14 @@ impl Simulation {
     pub fn step_order(&self) -> Vec<&str> {
         self.plan.step_order.iter().map(|&u| self.system.units[u].name.as_str()).collect()
     }
+}
+
+/// A resolved Real variable of a running simulation.
+#[derive(Clone, Copy, Debug)]
+pub struct Handle {
+    unit: usize,
+    value_reference: u32,
+    settable: bool,
 }
 
 /// What [`run`] gives back: the recording, and the error that stopped it early, if any.

@@ -168,8 +168,8 @@ impl Model for TaskSpaceControllerModel {
 /// With the base turned 90° (gravity along −y), the first target is the hanging pose
 /// (q_1 = −π/2, the others 0); the next segments move every joint away from it.
 pub const JOINT_SEQUENCE: [[f64; 4]; 5] = [
-    [-1.5707963267948966, 0.0, 0.0, 0.0],
-    [-0.7853981633974483, 0.5, -0.5, 0.5],
+    [-std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0],
+    [-std::f64::consts::FRAC_PI_4, 0.5, -0.5, 0.5],
     [0.0, -0.7, 0.7, -0.7],
     [-1.0, 1.0, 0.5, -1.0],
     [-0.5, -0.5, -1.0, 1.0],

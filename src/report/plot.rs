@@ -1,0 +1,497 @@
+//! PNG figures: a grid of panels, each with x–y series drawn as lines, dashed lines or dots,
+//! axis labels and a legend.
+//!
+//! Text is rasterised by `plotters`' `ab_glyph` backend from a TrueType file read at run time
+//! (DejaVu Sans, Debian package `fonts-dejavu-core`), so no system font service is involved.
+//! Every failure, a missing font included, is returned as `Err(String)` naming the output
+//! file; nothing here panics on odd data (empty series, one point, constant values, NaN).
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use plotters::style::{register_font, FontStyle};
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Style {
+    /// A solid line through the points in their order (broken where a point is NaN or infinite).
+    Line,
+    /// A dashed line through the points in their order (broken like [`Style::Line`]).
+    Dashed,
+    /// A dot at each point, unconnected.
+    Points,
+}
+
+/// One named curve of a panel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend entry; an empty name leaves the series out of the legend.
+    pub name: String,
+    /// `(x, y)` points in the panel's axis units. Points with a NaN or infinite coordinate, or one
+    /// beyond ±1e100, are skipped (a line is broken there).
+    pub points: Vec<(f64, f64)>,
+    /// How the points are drawn.
+    pub style: Style,
+}
+
+/// One plot of a figure: axes, labels and the series drawn in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Panel {
+    /// Caption above the plot.
+    pub title: String,
+    /// Horizontal axis label, units included (e.g. `"t [s]"`).
+    pub x_label: String,
+    /// Vertical axis label, units included (e.g. `"τ [N·m]"`).
+    pub y_label: String,
+    /// The curves, drawn in order (later ones on top), each in its own colour.
+    pub series: Vec<Series>,
+}
+
+/// Figure width, pixels.
+const WIDTH: u32 = 1000;
+/// Height of one row of panels, pixels.
+const ROW_HEIGHT: u32 = 320;
+/// Height of the band holding the figure title, pixels (none when the title is blank).
+const TITLE_HEIGHT: u32 = 44;
+/// Most panel rows in one figure (keeps the bitmap below ~50 MB).
+const MAX_ROWS: usize = 50;
+/// Coordinates beyond this magnitude are not plotted (keeps axis spans finite).
+const LIMIT: f64 = 1e100;
+/// Font family name the text styles below ask for; the TTF is registered under it.
+const FAMILY: &str = "sans-serif";
+
+/// Where the regular font may be: Debian/Ubuntu (`fonts-dejavu-core`), Arch, Fedora.
+const REGULAR_FONTS: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
+];
+/// Where the bold font may be; optional (titles fall back to the regular face).
+const BOLD_FONTS: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans-Bold.ttf",
+    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans-Bold.ttf",
+];
+
+/// Series colours, cycled: ten well-separated hues.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// Writes a PNG of the panels stacked vertically (or in a grid of `columns`), with a legend per panel.
+///
+/// The figure is 1000 px wide and 320 px tall per row of panels, plus a 44 px band for `title`
+/// when it is not blank. Panels fill the grid row by row; `columns` of 0 counts as 1 and is capped
+/// at the number of panels. Each axis spans its panel's plottable data with a 5 % margin (constant
+/// data gets a band around its value, no data the range 0–1). The file is always PNG, whatever
+/// `path`'s extension, and is written atomically: rendered to a temporary file in the same folder,
+/// then renamed over `path`, so a failure leaves no partial file.
+///
+/// Errors (as text naming `path`): no panels, more than 50 rows, the folder missing or not
+/// writable, no usable font (install Debian's `fonts-dejavu-core`), or a drawing failure.
+pub fn write_png(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<(), String> {
+    let fail = |what: String| format!("{}: {what}", path.display());
+    if panels.is_empty() {
+        return Err(fail("no panels to plot".into()));
+    }
+    let columns = columns.clamp(1, panels.len());
+    let rows = panels.len().div_ceil(columns);
+    if rows > MAX_ROWS {
+        return Err(fail(format!("{rows} rows of panels is more than the {MAX_ROWS} a figure may have")));
+    }
+    ensure_font().map_err(&fail)?;
+
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        let problem = if dir.exists() { "is not a folder" } else { "does not exist" };
+        return Err(fail(format!("folder {} {problem}", dir.display())));
+    }
+    // The suffix matters: the bitmap backend picks the image format from the extension.
+    let tmp = tempfile::Builder::new()
+        .permissions(crate::table::readable_file())
+        .prefix(".neurarm-")
+        .suffix(".png")
+        .tempfile_in(dir)
+        .map_err(|e| fail(format!("cannot create a temporary file in {}: {e}", dir.display())))?;
+
+    // plotters has internal unwraps; keep a surprise there from taking the caller down.
+    let rendered = catch_unwind(AssertUnwindSafe(|| render(tmp.path(), title, panels, columns, rows)));
+    match rendered {
+        Ok(result) => result.map_err(&fail)?,
+        Err(payload) => return Err(fail(format!("plotting failed: {}", panic_text(payload.as_ref())))),
+    }
+    tmp.as_file().sync_all().map_err(|e| fail(e.to_string()))?;
+    tmp.persist(path).map_err(|e| fail(e.error.to_string()))?;
+    Ok(())
+}
+
+/// Draws the whole figure into `file` (a `.png` path).
+fn render(file: &Path, title: &str, panels: &[Panel], columns: usize, rows: usize) -> Result<(), String> {
+    let title_height = if title.trim().is_empty() { 0 } else { TITLE_HEIGHT };
+    let height = title_height + ROW_HEIGHT * rows as u32;
+    let root = BitMapBackend::new(file, (WIDTH, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(text)?;
+    let body = if title_height > 0 {
+        let (band, rest) = root.split_vertically(title_height);
+        let style = TextStyle::from((FAMILY, 24, FontStyle::Bold)).pos(Pos::new(HPos::Center, VPos::Center));
+        band.draw_text(title.trim(), &style, (WIDTH as i32 / 2, title_height as i32 / 2)).map_err(text)?;
+        rest
+    } else {
+        root.clone()
+    };
+    for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
+        draw_panel(&area, panel).map_err(|e| format!("panel \"{}\": {e}", panel.title))?;
+    }
+    root.present().map_err(text)?;
+    Ok(())
+}
+
+/// Draws one panel (axes, mesh, series, legend) into `area`.
+fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel) -> Result<(), String> {
+    let runs: Vec<Vec<Vec<(f64, f64)>>> = panel.series.iter().map(|s| plottable_runs(&s.points)).collect();
+    let all = || runs.iter().flatten().flatten();
+    let (x0, x1) = axis_range(all().map(|p| p.0));
+    let (y0, y1) = axis_range(all().map(|p| p.1));
+
+    let mut chart = ChartBuilder::on(area)
+        .caption(&panel.title, (FAMILY, 17, FontStyle::Bold))
+        .margin(10)
+        .x_label_area_size(44)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(text)?;
+    let x_ticks = tick_format(x0, x1);
+    let y_ticks = tick_format(y0, y1);
+    chart
+        .configure_mesh()
+        .x_desc(panel.x_label.as_str())
+        .y_desc(panel.y_label.as_str())
+        .x_label_formatter(&x_ticks)
+        .y_label_formatter(&y_ticks)
+        .x_labels(8)
+        .y_labels(6)
+        .label_style((FAMILY, 13))
+        .axis_desc_style((FAMILY, 15))
+        .bold_line_style(RGBColor(215, 215, 215))
+        .light_line_style(RGBColor(242, 242, 242))
+        .draw()
+        .map_err(text)?;
+
+    for (i, (series, runs)) in panel.series.iter().zip(&runs).enumerate() {
+        let colour = PALETTE[i % PALETTE.len()];
+        let line = colour.stroke_width(2);
+        let dot = colour.filled();
+        let drawn = match series.style {
+            Style::Line => chart.draw_series(runs.iter().map(|run| PathElement::new(run.clone(), line))),
+            Style::Dashed => chart.draw_series(runs.iter().map(|run| DashedPathElement::new(run.clone(), 8, 5, line))),
+            Style::Points => chart.draw_series(runs.iter().flatten().map(|&p| Circle::new(p, 2, dot))),
+        }
+        .map_err(text)?;
+        if !series.name.is_empty() {
+            let empty = runs.is_empty();
+            let label = if empty { format!("{} (no data)", series.name) } else { series.name.clone() };
+            let style = series.style;
+            drawn.label(label).legend(move |(x, y)| legend_mark(style, (x, y), line, dot));
+        }
+        // A run of one point draws no line: mark it so it is not lost.
+        if series.style != Style::Points {
+            let lone = runs.iter().filter(|run| run.len() == 1).map(|run| Circle::new(run[0], 3, dot));
+            chart.draw_series(lone).map_err(text)?;
+        }
+    }
+
+    if panel.series.iter().any(|s| !s.name.is_empty()) {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font((FAMILY, 13))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(170, 170, 170))
+            .draw()
+            .map_err(text)?;
+    }
+    Ok(())
+}
+
+/// The legend sample for a series: a short line, dashed line or dot at backend pixel `(x, y)`.
+fn legend_mark<DB: DrawingBackend>(
+    style: Style,
+    (x, y): (i32, i32),
+    line: ShapeStyle,
+    dot: ShapeStyle,
+) -> DynElement<'static, DB, (i32, i32)> {
+    match style {
+        Style::Line => PathElement::new(vec![(x, y), (x + 22, y)], line).into_dyn(),
+        Style::Dashed => DashedPathElement::new(vec![(x, y), (x + 22, y)], 6, 4, line).into_dyn(),
+        Style::Points => Circle::new((x + 11, y), 3, dot).into_dyn(),
+    }
+}
+
+/// Splits `points` into runs of plottable points (finite, within ±[`LIMIT`]); each point that
+/// is not plottable ends a run. Empty runs are dropped.
+fn plottable_runs(points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+    let ok = |v: f64| v.is_finite() && v.abs() <= LIMIT;
+    let mut runs = Vec::new();
+    let mut run = Vec::new();
+    for &(x, y) in points {
+        if ok(x) && ok(y) {
+            run.push((x, y));
+        } else if !run.is_empty() {
+            runs.push(std::mem::take(&mut run));
+        }
+    }
+    if !run.is_empty() {
+        runs.push(run);
+    }
+    runs
+}
+
+/// Axis limits for `values` (all finite, within ±[`LIMIT`]): their span plus 5 % each side; a
+/// band of ±5 % (at least ±0.5) around constant values; 0–1 when there are none.
+fn axis_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    if lo > hi {
+        return (0.0, 1.0);
+    }
+    let span = hi - lo;
+    let magnitude = lo.abs().max(hi.abs());
+    if span <= magnitude * 1e-12 {
+        let centre = 0.5 * (lo + hi);
+        let half = (centre.abs() * 0.05).max(0.5);
+        return (centre - half, centre + half);
+    }
+    let pad = 0.05 * span;
+    (lo - pad, hi + pad)
+}
+
+/// A tick-label formatter for an axis from `lo` to `hi`: plain decimals with as many places as the
+/// tick spacing needs (trailing zeros dropped), scientific notation for very large or very small
+/// magnitudes.
+fn tick_format(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
+    let span = hi - lo;
+    let magnitude = lo.abs().max(hi.abs());
+    // Ticks are at most ~10 per axis at multiples of 1, 2 or 5 × 10^k.
+    let places = (-(span / 10.0).log10().floor()).clamp(0.0, 15.0) as usize;
+    let scientific = magnitude >= 1e6 || places > 5;
+    move |&v: &f64| {
+        if v == 0.0 || (v.abs() < span * 1e-9) {
+            "0".to_string()
+        } else if scientific {
+            let text = format!("{v:.3e}");
+            match text.split_once('e') {
+                Some((mantissa, exponent)) => format!("{}e{exponent}", trim_zeros(mantissa)),
+                None => text,
+            }
+        } else {
+            trim_zeros(&format!("{v:.places$}")).to_string()
+        }
+    }
+}
+
+/// `text` without the trailing zeros of its fraction (and the point, if nothing is left of it).
+fn trim_zeros(text: &str) -> &str {
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        text
+    }
+}
+
+/// Text of a `Display` error.
+fn text(e: impl std::fmt::Display) -> String {
+    e.to_string()
+}
+
+/// Text of a panic payload.
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "panic in the plotting library".to_string()
+    }
+}
+
+/// Registers the text font with plotters once per process. The outcome, failure included, is
+/// kept: the font file is read (and its bytes leaked, as plotters needs them `'static`) once.
+fn ensure_font() -> Result<(), String> {
+    static OUTCOME: OnceLock<Result<(), String>> = OnceLock::new();
+    OUTCOME
+        .get_or_init(|| {
+            let (path, bytes) = read_font(&REGULAR_FONTS.map(Path::new))?;
+            register_font(FAMILY, FontStyle::Normal, bytes)
+                .map_err(|_| format!("font {} is not a usable TrueType font", path.display()))?;
+            // Bold is a nicety: without it plotters falls back to the regular face.
+            if let Ok((_, bold)) = read_font(&BOLD_FONTS.map(Path::new)) {
+                let _ = register_font(FAMILY, FontStyle::Bold, bold);
+            }
+            Ok(())
+        })
+        .clone()
+}
+
+/// Reads the first of `candidates` that exists, leaking its bytes to make them `'static`.
+fn read_font(candidates: &[&Path]) -> Result<(PathBuf, &'static [u8]), String> {
+    let mut problems = Vec::new();
+    for &path in candidates {
+        match std::fs::read(path) {
+            Ok(bytes) => return Ok((path.to_path_buf(), Box::leak(bytes.into_boxed_slice()))),
+            Err(e) => problems.push(format!("{}: {e}", path.display())),
+        }
+    }
+    Err(format!("no font for plot text ({}); install the Debian package fonts-dejavu-core", problems.join("; ")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sine(n: usize, phase: f64) -> Vec<(f64, f64)> {
+        (0..n).map(|i| i as f64 * 0.01).map(|t| (t, (6.0 * t + phase).sin())).collect()
+    }
+
+    fn series(name: &str, points: Vec<(f64, f64)>, style: Style) -> Series {
+        Series { name: name.into(), points, style }
+    }
+
+    fn panel(title: &str, series: Vec<Series>) -> Panel {
+        Panel { title: title.into(), x_label: "t [s]".into(), y_label: "q [rad]".into(), series }
+    }
+
+    fn leftovers(dir: &Path) -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".neurarm-"))
+            .collect()
+    }
+
+    #[test]
+    fn two_panel_figure_is_a_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("figure.png");
+        let panels = [
+            panel(
+                "Joint 1",
+                vec![
+                    series("reference", sine(500, 0.0), Style::Line),
+                    series("network", sine(500, 0.3), Style::Dashed),
+                    series("samples", sine(500, 0.6).into_iter().step_by(25).collect(), Style::Points),
+                ],
+            ),
+            Panel {
+                title: "Joint 2 torque".into(),
+                x_label: "t [s]".into(),
+                y_label: "τ [N·m]".into(),
+                series: vec![series("τ", sine(500, 1.0).into_iter().map(|(t, v)| (t, 40.0 * v)).collect(), Style::Line)],
+            },
+        ];
+        write_png(&path, "Two joints", &panels, 1).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+        assert!(bytes.len() > 10_000, "only {} bytes", bytes.len());
+        assert!(leftovers(dir.path()).is_empty());
+        if let Ok(keep) = std::env::var("NEURARM_PLOT_SAMPLE") {
+            std::fs::copy(&path, keep).unwrap();
+        }
+    }
+
+    #[test]
+    fn odd_data_does_not_panic() {
+        let dir = tempfile::tempdir().unwrap();
+        let nan = f64::NAN;
+        let cases: Vec<Vec<Panel>> = vec![
+            vec![panel("empty panel", vec![])],
+            vec![panel("empty series", vec![series("nothing", vec![], Style::Line)])],
+            vec![panel("one point", vec![series("p", vec![(1.0, 2.0)], Style::Line)])],
+            vec![panel("one dot", vec![series("p", vec![(1.0, 2.0)], Style::Points)])],
+            vec![panel("constant", vec![series("c", vec![(0.0, 3.0), (1.0, 3.0), (2.0, 3.0)], Style::Dashed)])],
+            vec![panel("zero", vec![series("z", vec![(5.0, 0.0), (5.0, 0.0)], Style::Line)])],
+            vec![panel("all NaN", vec![series("n", vec![(nan, nan), (1.0, nan), (nan, 1.0)], Style::Line)])],
+            vec![panel(
+                "gaps",
+                vec![series(
+                    "g",
+                    vec![(0.0, 1.0), (1.0, nan), (2.0, 2.0), (3.0, f64::INFINITY), (4.0, 1e300), (5.0, 0.5), (6.0, 0.7)],
+                    Style::Line,
+                )],
+            )],
+            vec![panel("tiny", vec![series("t", vec![(0.0, 1e-300), (1.0, 2e-300)], Style::Line)])],
+            vec![panel("huge", vec![series("h", vec![(-1e99, 1e99), (1e99, -1e99)], Style::Line)])],
+            vec![panel("", vec![series("", sine(10, 0.0), Style::Line)]); 5],
+        ];
+        for (i, panels) in cases.iter().enumerate() {
+            let path = dir.path().join(format!("case{i}.png"));
+            let title = if i % 2 == 0 { "odd data" } else { "" };
+            match write_png(&path, title, panels, 2) {
+                Ok(()) => assert_eq!(&std::fs::read(&path).unwrap()[..4], b"\x89PNG", "case {i}"),
+                Err(e) => assert!(e.contains("case"), "case {i}: unclear error {e}"),
+            }
+        }
+        let none = dir.path().join("none.png");
+        let e = write_png(&none, "no panels", &[], 1).unwrap_err();
+        assert!(e.contains("none.png") && e.contains("no panels"), "{e}");
+        assert!(!none.exists());
+        assert!(leftovers(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn missing_folder_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("no-such-folder").join("figure.png");
+        let e = write_png(&path, "t", &[panel("p", vec![series("s", sine(10, 0.0), Style::Line)])], 1).unwrap_err();
+        assert!(e.contains(&path.display().to_string()), "{e}");
+        assert!(e.contains("does not exist"), "{e}");
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn missing_font_is_a_clear_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let fake = dir.path().join("NoSuchFont.ttf");
+        let e = read_font(&[fake.as_path()]).unwrap_err();
+        assert!(e.contains("NoSuchFont.ttf") && e.contains("fonts-dejavu-core"), "{e}");
+    }
+
+    #[test]
+    fn axis_ranges_cover_the_data() {
+        assert_eq!(axis_range(std::iter::empty()), (0.0, 1.0));
+        let (lo, hi) = axis_range([2.0, 2.0].into_iter());
+        assert!(lo < 2.0 && hi > 2.0 && hi - lo >= 1.0);
+        let (lo, hi) = axis_range([0.0, 10.0].into_iter());
+        assert!((lo + 0.5).abs() < 1e-12 && (hi - 10.5).abs() < 1e-12);
+        assert_eq!(plottable_runs(&[(0.0, f64::NAN), (1.0, 1.0), (2.0, f64::NAN), (3.0, 3.0), (4.0, 4.0)]).len(), 2);
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        let f = tick_format(-0.5, 10.5);
+        assert_eq!(f(&2.0), "2");
+        let f = tick_format(0.0, 0.03);
+        assert_eq!(f(&0.005), "0.005");
+        assert_eq!(f(&0.0), "0");
+        let f = tick_format(0.0, 2e7);
+        assert_eq!(f(&1e7), "1e7");
+        assert_eq!(f(&-2.5e7), "-2.5e7");
+        let f = tick_format(0.0, 1e-6);
+        assert_eq!(f(&2e-7), "2e-7");
+    }
+}

@@ -1,0 +1,47 @@
+//! The whole pipeline of `neurarm paper` on its reduced configuration (3⁴ gravity grid, one
+//! period of tracking): it runs, writes its outputs, and its quality figures hold.
+//! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
+
+use neurarm::arm::JointFriction;
+use neurarm::experiments::{paper::run_paper, Settings};
+
+#[test]
+fn the_quick_paper_run_reproduces_the_papers_findings() {
+    let out = tempfile::tempdir().unwrap();
+    let settings = Settings::quick();
+    let r = run_paper(out.path(), &settings, &mut |line| eprintln!("{line}")).unwrap();
+    let t = r.table_1;
+    eprintln!("Table 1: {t:?}; NN/perfect {:.3}, none/perfect {:.1}, real NN/none {:.3}", t[1] / t[0], t[2] / t[0], t[3] / t[4]);
+    assert!(t[1] / t[0] <= 1.05, "sim NN/perfect {} (the paper: 1.14)", t[1] / t[0]);
+    assert!(t[2] / t[0] >= 5.0, "sim none/perfect {}", t[2] / t[0]);
+    assert!(t[3] / t[4] <= 0.3, "real NN/none {} (the paper: 0.24)", t[3] / t[4]);
+    assert_eq!(r.gravity_pairs, 81);
+
+    for f in ["report.md", "fmu/PlanarArm.fmu", "fmu/NnCompensator.fmu", "fmu/TaskSpaceController.fmu", "nets/gravity.json", "data/gravity_pairs.csv", "data/tracking_sim_nn.csv"] {
+        assert!(out.path().join(f).is_file(), "{f} written");
+    }
+    let report = std::fs::read_to_string(out.path().join("report.md")).unwrap();
+    assert!(report.contains("| paper | 0.0014 | 0.0016 | 0.0248 | 0.0071 | 0.0291 |"));
+
+    // The identified friction pairs against the simulated arm's own friction law: an
+    // independent check of the constant-torque procedure. Up to 2 rad/s it is exact to the
+    // settling tolerance; faster, joints 2 and 3 deviate by up to ~0.5 N·m because the PD
+    // "hold" of the other joints is not rigid (measured, reported, not yet fixed), so the
+    // bound is asserted where the procedure is meant to be exact.
+    for joint in 0..4 {
+        let text = std::fs::read_to_string(out.path().join(format!("data/friction_sim_joint{}.csv", joint + 1))).unwrap();
+        let law = JointFriction::default_for_joint(joint);
+        let mut worst: f64 = 0.0;
+        let mut rows = 0;
+        for line in text.lines().skip(1) {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            if v[0].abs() <= 2.0 {
+                worst = worst.max((v[1] - law.torque(v[0])).abs());
+            }
+            rows += 1;
+        }
+        eprintln!("joint {}: {rows} pairs, largest |tau - f(qd)| up to 2 rad/s = {worst:.2e} N.m", joint + 1);
+        assert!(rows >= 60, "pairs over ±5 rad/s");
+        assert!(worst < 0.01, "joint {}: identified friction off the law by {worst} N·m", joint + 1);
+    }
+}

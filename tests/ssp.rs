@@ -1,0 +1,193 @@
+//! SSP export of a system: the archive's entries and the SystemStructure.ssd inside.
+//! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
+
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use neurarm::master::ssp::write_ssp;
+use neurarm::master::{ConnectionSpec, FmuEntry, SimulationSpec, SystemSpec, Value};
+use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
+
+fn fmu(dir: &Path, identifier: &str, model: ModelSpec) -> PathBuf {
+    let path = dir.join(format!("{identifier}.fmu"));
+    export_fmu(&FmuSpec { identifier: identifier.into(), model }, &[], &path).unwrap();
+    path
+}
+
+fn entry(name: &str, path: &str, parameters: &[(&str, Value)]) -> FmuEntry {
+    FmuEntry { name: name.into(), path: path.into(), parameters: parameters.iter().map(|(k, v)| (k.to_string(), v.clone())).collect::<BTreeMap<_, _>>() }
+}
+
+fn connection(from: &str, to: &str) -> ConnectionSpec {
+    ConnectionSpec { from: from.into(), to: to.into() }
+}
+
+/// y' = −2 y as an integrator (y0 = 1.5) and a gain (k = −2) in a loop.
+fn loop_spec(integrator: &str) -> SystemSpec {
+    SystemSpec {
+        fmu: vec![entry("int", integrator, &[("y0", Value::Real(1.5))]), entry("gain", "Gain.fmu", &[("k", Value::Integer(-2))])],
+        connection: vec![connection("int.y", "gain.u"), connection("gain.y*", "int.u*")],
+        simulation: SimulationSpec {
+            start: 0.0,
+            stop: 2.0,
+            step: 0.01,
+            algorithm: Default::default(),
+            record: vec!["int.y".into(), "gain.y".into()],
+            record_every: 1,
+        },
+    }
+}
+
+fn names(archive: &mut zip::ZipArchive<std::fs::File>) -> Vec<String> {
+    let mut v: Vec<String> = archive.file_names().map(str::to_owned).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn an_integrator_gain_loop_becomes_an_ssp() {
+    let dir = tempfile::tempdir().unwrap();
+    fmu(dir.path(), "Integrator", ModelSpec::Integrator { y0: 0.0 });
+    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    let out = dir.path().join("loop.ssp");
+    write_ssp(&loop_spec("Integrator.fmu"), dir.path(), &out).unwrap();
+
+    let mut archive = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
+    assert_eq!(names(&mut archive), ["SystemStructure.ssd", "resources/Gain.fmu", "resources/Integrator.fmu"]);
+    // The FMUs go in byte for byte.
+    for name in ["Gain", "Integrator"] {
+        let mut inside = Vec::new();
+        archive.by_name(&format!("resources/{name}.fmu")).unwrap().read_to_end(&mut inside).unwrap();
+        assert_eq!(inside, std::fs::read(dir.path().join(format!("{name}.fmu"))).unwrap(), "{name}.fmu");
+    }
+    let mut ssd = String::new();
+    archive.by_name("SystemStructure.ssd").unwrap().read_to_string(&mut ssd).unwrap();
+
+    for needle in [
+        r#"xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription""#,
+        r#"version="1.0" name="loop""#,
+        r#"<ssd:Component name="int" type="application/x-fmu-sharedlibrary" source="resources/Integrator.fmu" implementation="CoSimulation">"#,
+        r#"<ssd:Component name="gain" type="application/x-fmu-sharedlibrary" source="resources/Gain.fmu" implementation="CoSimulation">"#,
+        r#"<ssd:Connection startElement="int" startConnector="y" endElement="gain" endConnector="u"/>"#,
+        // The wildcard, expanded.
+        r#"<ssd:Connection startElement="gain" startConnector="y" endElement="int" endConnector="u"/>"#,
+        r#"<ssd:Connector name="u" kind="input">"#,
+        r#"<ssd:Connector name="y" kind="output">"#,
+        r#"<ssd:Connector name="y0" kind="parameter">"#,
+        r#"<ssd:Connector name="k" kind="parameter">"#,
+        "<ssc:Real/>",
+        // Hierarchical names; the integer given for a Real goes in as a Real.
+        r#"<ssv:Parameter name="int.y0">"#,
+        r#"<ssv:Real value="1.5"/>"#,
+        r#"<ssv:Parameter name="gain.k">"#,
+        r#"<ssv:Real value="-2.0"/>"#,
+        r#"<ssd:DefaultExperiment startTime="0.0" stopTime="2.0">"#,
+        r#"stepSize="0.01" algorithm="gauss-seidel" recordEvery="1""#,
+        r#"<nr:Record variable="int.y"/>"#,
+    ] {
+        assert!(ssd.contains(needle), "SystemStructure.ssd lacks {needle}:\n{ssd}");
+    }
+    assert_eq!(ssd.matches("<ssd:Connection ").count(), 2, "{ssd}");
+    assert_eq!(ssd.matches("<ssd:Component ").count(), 2, "{ssd}");
+    // Elements come in the standard's order: bindings, then elements, then connections.
+    let at = |s: &str| ssd.find(s).unwrap();
+    assert!(at("<ssd:ParameterBindings>") < at("<ssd:Elements>") && at("<ssd:Elements>") < at("<ssd:Connections>"));
+    assert!(at("</ssd:System>") < at("<ssd:DefaultExperiment"));
+    // Nothing but the archive is left in the folder.
+    let mut left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    left.sort();
+    assert_eq!(left, ["Gain.fmu", "Integrator.fmu", "loop.ssp"]);
+}
+
+/// Two units from one file share one copy; names that need escaping are escaped.
+#[test]
+fn shared_fmus_are_copied_once_and_text_is_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("my blocks")).unwrap();
+    fmu(&dir.path().join("my blocks"), "Integrator", ModelSpec::Integrator { y0: 0.0 });
+    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    let mut spec = loop_spec("my blocks/Integrator.fmu");
+    spec.fmu.push(entry("a&b", "my blocks/Integrator.fmu", &[]));
+    spec.connection.push(connection("int.y", "a&b.u"));
+    let out = dir.path().join("two.ssp");
+    write_ssp(&spec, dir.path(), &out).unwrap();
+    let mut archive = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
+    assert_eq!(names(&mut archive), ["SystemStructure.ssd", "resources/Gain.fmu", "resources/Integrator.fmu"]);
+    let mut ssd = String::new();
+    archive.by_name("SystemStructure.ssd").unwrap().read_to_string(&mut ssd).unwrap();
+    assert!(ssd.contains(r#"<ssd:Component name="a&amp;b" type="application/x-fmu-sharedlibrary" source="resources/Integrator.fmu""#), "{ssd}");
+    assert!(ssd.contains(r#"endElement="a&amp;b" endConnector="u""#), "{ssd}");
+}
+
+#[test]
+fn a_missing_fmu_is_named_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    let out = dir.path().join("loop.ssp");
+    let e = write_ssp(&loop_spec("NoSuch.fmu"), dir.path(), &out).unwrap_err();
+    assert!(e.contains("NoSuch.fmu") && e.contains("'int'"), "{e}");
+    assert!(!out.exists());
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left, ["Gain.fmu"], "no temporary file is left behind");
+
+    // An earlier archive at `out` survives a failed export untouched.
+    std::fs::write(&out, b"previous").unwrap();
+    write_ssp(&loop_spec("NoSuch.fmu"), dir.path(), &out).unwrap_err();
+    assert_eq!(std::fs::read(&out).unwrap(), b"previous");
+}
+
+#[test]
+fn bad_systems_are_refused_by_unit_and_variable() {
+    let dir = tempfile::tempdir().unwrap();
+    fmu(dir.path(), "Integrator", ModelSpec::Integrator { y0: 0.0 });
+    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    let out = dir.path().join("bad.ssp");
+    let check = |spec: SystemSpec, expected: &[&str]| {
+        let e = write_ssp(&spec, dir.path(), &out).unwrap_err();
+        for x in expected {
+            assert!(e.contains(x), "'{x}' not in: {e}");
+        }
+        assert!(!out.exists());
+    };
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.fmu[1].parameters.insert("kk".into(), Value::Real(1.0));
+    check(s, &["'gain'", "'kk'", "no such variable", "Gain.fmu"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.fmu[1].parameters.insert("k".into(), Value::Boolean(true));
+    check(s, &["'gain'", "'k'", "type mismatch"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.fmu[1].parameters.insert("y".into(), Value::Real(1.0));
+    check(s, &["'gain'", "'y'", "an output cannot be set"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.connection.push(connection("int.y", "gain.u"));
+    check(s, &["'gain'", "'u'", "already connected"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.connection = vec![connection("int.q_*", "gain.q_*")];
+    check(s, &["'int'", "no output matches 'q_*'"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.connection = vec![connection("int.u", "gain.u")];
+    check(s, &["'int'", "must start at an output"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.connection = vec![connection("nobody.y", "gain.u")];
+    check(s, &["'nobody'", "no unit"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.fmu[1].name = "int".into();
+    check(s, &["'int'", "two units"]);
+
+    let mut s = loop_spec("Integrator.fmu");
+    s.simulation.record.push("gain.z".into());
+    check(s, &["'gain'", "'z'"]);
+
+    // Not an FMU at all.
+    std::fs::write(dir.path().join("Text.fmu"), "hello").unwrap();
+    check(loop_spec("Text.fmu"), &["'int'", "Text.fmu", "not an FMU"]);
+}
