@@ -233,6 +233,8 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
         }
     }
     lap(&mut results, "closed loops", log);
+    write_plots(out, &binned_all, &nets, &loop_runs)?;
+    lap(&mut results, "plots", log);
     let report = report_markdown(&results, settings, started.elapsed().as_secs_f64());
     let path = out.join("report.md");
     write_text_atomic(&path, &report).map_err(io(&path))?;
@@ -308,9 +310,68 @@ pub fn report_markdown(r: &PaperResults, settings: &Settings, total_s: f64) -> S
     }
     let _ = writeln!(s, "\nThe paper's K_p = 0.025 has no units; in N·m/rad it would move no joint against its Coulomb friction \
         (0.3–1.5 N·m needs an error of 12–60 rad), so this run uses {} N·m/rad, with a small K_d = {} N·m·s/rad: with P alone the loop rings for seconds after each target step (damped only by friction).\n", settings.joint_kp, settings.joint_kd);
+    let _ = writeln!(s, "## Figures\n\n![friction](friction.png)\n\n![tracking](tracking.png)\n\n![gravity compensation](gravity_compensation.png)\n");
     let _ = writeln!(s, "## Time per stage\n");
     for (name, secs) in &r.timings {
         let _ = writeln!(s, "- {name}: {secs:.1} s");
     }
     s
+}
+
+/// The figures: friction data with the nets (Figs. 6/7), tracking (Figs. 9/10), joint runs
+/// (Figs. 11/13/14).
+fn write_plots(out: &Path, binned: &[Vec<Vec<(f64, f64, usize)>>; 2], nets: &[WeightsFile], runs: &[LoopRun]) -> Result<(), String> {
+    use crate::report::plot::{write_png, Panel, Series, Style};
+    let mut panels = Vec::new();
+    for (k, tag) in ["simulated", "emulated real"].iter().enumerate() {
+        for j in 0..4 {
+            let net = nets[4 * k + j].network()?;
+            let curve: Vec<(f64, f64)> = (-500..=500).map(|i| i as f64 * 0.01).map(|v| (v, net.evaluate(&[v])[0])).collect();
+            panels.push(Panel {
+                title: format!("joint {} ({tag})", j + 1),
+                x_label: "qd [rad/s]".into(),
+                y_label: "τ [N·m]".into(),
+                series: vec![
+                    Series { name: "binned data".into(), points: binned[k][j].iter().map(|&(v, t, _)| (v, t)).collect(), style: Style::Points },
+                    Series { name: "net".into(), points: curve, style: Style::Line },
+                ],
+            });
+        }
+    }
+    write_png(&out.join("friction.png"), "Friction: identified pairs and trained nets", &panels, 4)?;
+    let xy = |r: &LoopRun, a: &str, b: &str| -> Vec<(f64, f64)> { r.column(a).unwrap_or_default().into_iter().zip(r.column(b).unwrap_or_default()).collect() };
+    let err = |r: &LoopRun| -> Vec<(f64, f64)> {
+        let (t, ex, ey) = (r.column("time").unwrap_or_default(), r.column("ctl.error_x").unwrap_or_default(), r.column("ctl.error_y").unwrap_or_default());
+        t.iter().zip(ex.iter().zip(&ey)).map(|(t, (a, b))| (*t, 1e3 * (a * a + b * b).sqrt())).collect()
+    };
+    let names = ["perfect", "NN", "none", "real NN", "real none"];
+    let styles = [Style::Dashed, Style::Line, Style::Line, Style::Line, Style::Line];
+    let panels = vec![
+        Panel {
+            title: "end-effector path (simulated)".into(),
+            x_label: "x [m]".into(),
+            y_label: "y [m]".into(),
+            series: std::iter::once(Series { name: "reference".into(), points: xy(&runs[0], "ctl.x_ref", "ctl.y_ref"), style: Style::Dashed })
+                .chain((0..3).map(|k| Series { name: names[k].into(), points: xy(&runs[k], "arm.x", "arm.y"), style: Style::Line }))
+                .collect(),
+        },
+        Panel {
+            title: "tracking error |x_d − x|".into(),
+            x_label: "t [s]".into(),
+            y_label: "error [mm]".into(),
+            series: (0..5).map(|k| Series { name: names[k].into(), points: err(&runs[k]), style: styles[k] }).collect(),
+        },
+    ];
+    write_png(&out.join("tracking.png"), "Task-space tracking with friction compensation (Table 1)", &panels, 1)?;
+    let mut panels = Vec::new();
+    for j in 1..=4 {
+        let t = runs[5].column("time").unwrap_or_default();
+        let mut series = vec![Series { name: "target".into(), points: t.iter().copied().zip(runs[5].column(&format!("ctl.q_target_{j}")).unwrap_or_default()).collect(), style: Style::Dashed }];
+        for (k, name) in ["ideal", "NN", "none"].iter().enumerate() {
+            let r = &runs[5 + k];
+            series.push(Series { name: (*name).into(), points: r.column("time").unwrap_or_default().into_iter().zip(r.column(&format!("arm.q_{j}")).unwrap_or_default()).collect(), style: Style::Line });
+        }
+        panels.push(Panel { title: format!("joint {j}"), x_label: "t [s]".into(), y_label: "q [rad]".into(), series });
+    }
+    write_png(&out.join("gravity_compensation.png"), "Joint-space P control with gravity compensation", &panels, 2)
 }
