@@ -21,14 +21,27 @@ fn reference_derivatives_match_finite_differences_and_it_passes_its_centre() {
     assert!((paper_reference(t, c).0 - c).norm() < 1e-12);
 }
 
+/// J⁺ checked against its definition, the four Penrose conditions, at a regular pose and
+/// at two singular ones (stretched out; folded back on itself).
 #[test]
-fn pseudo_inverse_is_a_right_inverse_and_refuses_singular_poses() {
+fn pseudo_inverse_meets_the_penrose_conditions_at_regular_and_singular_poses() {
     let arm = ArmParams::default_four_link();
-    let jac = jacobian(&arm, &[0.3, 1.1, -0.7, 0.5]);
-    let pinv = pseudo_inverse(&jac).unwrap();
-    assert!((&jac * &pinv - nalgebra::DMatrix::<f64>::identity(2, 2)).amax() < 1e-12);
-    // Stretched out: J Jᵀ is singular.
-    assert!(pseudo_inverse(&jacobian(&arm, &[0.3, 0.0, 0.0, 0.0])).is_none());
+    for q in [[0.3, 1.1, -0.7, 0.5], [0.3, 0.0, 0.0, 0.0], [0.0, 0.0, std::f64::consts::PI, 0.0]] {
+        let jac = jacobian(&arm, &q);
+        let pinv = pseudo_inverse(&jac).unwrap();
+        let (jp, pj) = (&jac * &pinv, &pinv * &jac);
+        assert!((&jp * &jac - &jac).amax() < 1e-12, "J J⁺ J = J at {q:?}");
+        assert!((&pj * &pinv - &pinv).amax() < 1e-9, "J⁺ J J⁺ = J⁺ at {q:?}");
+        assert!((&jp - jp.transpose()).amax() < 1e-12 && (&pj - pj.transpose()).amax() < 1e-12, "symmetric at {q:?}");
+        assert!(pinv.amax() < 1e3, "bounded at {q:?}");
+    }
+    let regular = pseudo_inverse(&jacobian(&arm, &[0.3, 1.1, -0.7, 0.5])).unwrap();
+    assert!((&jacobian(&arm, &[0.3, 1.1, -0.7, 0.5]) * regular - nalgebra::DMatrix::<f64>::identity(2, 2)).amax() < 1e-12);
+    // Stretched out, J has rank 1: J J⁺ projects onto the one direction left.
+    let jac = jacobian(&arm, &[0.3, 0.0, 0.0, 0.0]);
+    let jp = &jac * pseudo_inverse(&jac).unwrap();
+    assert!((jp.trace() - 1.0).abs() < 1e-9);
+    assert!(pseudo_inverse(&nalgebra::DMatrix::from_element(2, 4, f64::NAN)).is_none());
 }
 
 /// With the controller's model equal to the arm (no friction), the end-effector acceleration

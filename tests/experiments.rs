@@ -4,6 +4,7 @@
 
 use neurarm::arm::JointFriction;
 use neurarm::experiments::{paper::run_paper, Settings};
+use neurarm::master::SystemSpec;
 
 #[test]
 fn the_quick_paper_run_reproduces_the_papers_findings() {
@@ -20,6 +21,22 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
     for f in ["report.md", "fmu/PlanarArm.fmu", "fmu/NnCompensator.fmu", "fmu/TaskSpaceController.fmu", "nets/gravity.json", "data/gravity_pairs.csv", "data/tracking_sim_nn.csv"] {
         assert!(out.path().join(f).is_file(), "{f} written");
     }
+    // Every closed loop as a system file and an SSP archive; the system file reruns the
+    // recorded run exactly (tests/python/test_closed_loops.py reruns it without our master).
+    for name in ["tracking_sim_perfect", "tracking_sim_nn", "tracking_sim_none", "tracking_real_nn", "tracking_real_none", "joint_ideal", "joint_nn", "joint_none"] {
+        assert!(out.path().join(format!("{name}.ssp")).is_file(), "{name}.ssp written");
+        let path = out.path().join(format!("systems/{name}.toml"));
+        let spec = SystemSpec::from_toml(&std::fs::read_to_string(&path).unwrap(), name).unwrap();
+        assert_eq!(SystemSpec::from_toml(&spec.to_toml().unwrap(), name).unwrap(), spec);
+    }
+    let spec = SystemSpec::from_toml(&std::fs::read_to_string(out.path().join("systems/joint_nn.toml")).unwrap(), "joint_nn").unwrap();
+    let rerun = neurarm::master::run(&spec, &out.path().join("systems")).unwrap();
+    assert!(rerun.error.is_none());
+    let recorded = std::fs::read_to_string(out.path().join("data/joint_nn.csv")).unwrap();
+    let first_after_start: Vec<f64> = recorded.lines().nth(2).unwrap().split(',').map(|x| x.parse().unwrap()).collect();
+    assert_eq!(rerun.rows[10], first_after_start, "row at t = 10 steps");
+    assert_eq!(rerun.rows.last().unwrap()[0], spec.simulation.stop);
+
     let report = std::fs::read_to_string(out.path().join("report.md")).unwrap();
     assert!(report.contains("| paper | 0.0014 | 0.0016 | 0.0248 | 0.0071 | 0.0291 |"));
 

@@ -18,16 +18,26 @@ pub fn paper_reference(t: f64, centre: Vector2<f64>) -> (Vector2<f64>, Vector2<f
     (x, xd, xdd)
 }
 
-/// Moore–Penrose pseudo-inverse J⁺ = Jᵀ (J Jᵀ)⁻¹ of a full-rank 2×n Jacobian (n×2); `None`
-/// at a singular pose (J Jᵀ not invertible to working precision).
+/// Moore–Penrose pseudo-inverse J⁺ (n×2) of a 2×n Jacobian. Away from singular poses this
+/// is Jᵀ (J Jᵀ)⁻¹; where J loses rank (σ_min < 1e-6 σ_max) it comes from the SVD with the
+/// lost direction dropped, so J⁺ exists at every pose: any master that starts its
+/// connections at zero (q = 0 is the stretched, singular pose) gets a bounded answer.
+/// `None` only when J is not finite.
 pub fn pseudo_inverse(jac: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    let jjt = jac * jac.transpose();
-    let m = Matrix2::new(jjt[(0, 0)], jjt[(0, 1)], jjt[(1, 0)], jjt[(1, 1)]);
-    if m.determinant().abs() <= 1e-12 * m.norm_squared() {
+    if !jac.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let inv = m.try_inverse()?;
-    Some(jac.transpose() * DMatrix::from_fn(2, 2, |r, c| inv[(r, c)]))
+    let jjt = jac * jac.transpose();
+    let m = Matrix2::new(jjt[(0, 0)], jjt[(0, 1)], jjt[(1, 0)], jjt[(1, 1)]);
+    // det(JJᵀ)/‖JJᵀ‖² ≈ (σ₂/σ₁)²: the fast form while σ₂/σ₁ > 1e-6.
+    if m.determinant().abs() > 1e-12 * m.norm_squared() {
+        if let Some(inv) = m.try_inverse() {
+            return Some(jac.transpose() * DMatrix::from_fn(2, 2, |r, c| inv[(r, c)]));
+        }
+    }
+    let svd = jac.clone().try_svd(true, true, f64::EPSILON, 0)?;
+    let largest = svd.singular_values.max();
+    svd.pseudo_inverse(1e-6 * largest.max(f64::MIN_POSITIVE)).ok()
 }
 
 /// Gains and null-space damping of the task-space controller.

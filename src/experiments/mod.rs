@@ -4,6 +4,7 @@
 
 pub mod paper;
 
+use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -14,7 +15,7 @@ use nalgebra::{DMatrix, Vector2};
 use crate::arm::{jacobian, mass_matrix, ArmParams, FrictionBranch, JointFriction};
 use crate::config::ArmConfig;
 use crate::control::{inverse_kinematics, paper_reference, pseudo_inverse, TaskSpaceGains};
-use crate::master::{Algorithm, Handle, MasterError, Simulation, System, Value};
+use crate::master::{Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, SimulationSpec, Simulation, System, SystemSpec, Value};
 use crate::models::{export_fmu, FmuSpec, ModelSpec};
 use crate::nn::{train, Signal, TrainSettings, WeightsFile};
 
@@ -111,7 +112,9 @@ pub fn emulated_real_arm() -> ArmConfig {
     c
 }
 
-/// The FMUs every experiment is built from.
+/// The FMUs every experiment is built from. Compensators are exported with the switches each
+/// loop needs as start values, so the loops' system and SSP files set no Boolean parameter
+/// (fmpy's `simulate_ssp` sets every Boolean parameter of an SSP to true).
 #[derive(Clone, Debug)]
 pub struct Fmus {
     /// The nominal (simulated) arm, horizontal unless its `base_angle` is set.
@@ -122,10 +125,11 @@ pub struct Fmus {
     pub task_controller: PathBuf,
     /// The joint controller.
     pub joint_controller: PathBuf,
-    /// Ideal compensator of the nominal arm (horizontal: friction only).
-    pub ideal: PathBuf,
-    /// Ideal compensator of the nominal arm with its base turned 90° (gravity present).
-    pub ideal_vertical: PathBuf,
+    /// Ideal friction compensator of the nominal arm (its `enable_gravity` starts false).
+    pub ideal_friction: PathBuf,
+    /// Ideal gravity compensator of the nominal arm with its base turned 90° (its
+    /// `enable_friction` starts false).
+    pub ideal_gravity: PathBuf,
 }
 
 /// Exports the base FMUs into `dir`.
@@ -146,10 +150,10 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
             ModelSpec::TaskSpaceController { model: nominal.arm.clone().frictionless(), gains: TaskSpaceGains::default(), centre, q_start },
         )?,
         joint_controller: export("JointController", ModelSpec::JointController { joints: 4, kp: 50.0, kd: 0.0, use_sequence: true })?,
-        ideal: export("IdealCompensator", ModelSpec::IdealCompensator { arm: nominal.arm.clone(), enable_friction: true, enable_gravity: true })?,
-        ideal_vertical: export(
-            "IdealCompensatorVertical",
-            ModelSpec::IdealCompensator { arm: nominal.arm.clone().with_base_angle(PI / 2.0), enable_friction: true, enable_gravity: true },
+        ideal_friction: export("IdealFrictionCompensator", ModelSpec::IdealCompensator { arm: nominal.arm.clone(), enable_friction: true, enable_gravity: false })?,
+        ideal_gravity: export(
+            "IdealGravityCompensator",
+            ModelSpec::IdealCompensator { arm: nominal.arm.clone().with_base_angle(PI / 2.0), enable_friction: false, enable_gravity: true },
         )?,
     })
 }
@@ -480,15 +484,6 @@ pub fn train_gravity_net(pairs: &[GravityPair], settings: &Settings, on_epoch: &
 // ---------------------------------------------------------------------------------------
 // Closed loops
 
-/// Which compensation a loop uses.
-#[derive(Clone, Debug)]
-pub enum Compensation {
-    /// None: `tau_comp` stays 0.
-    None,
-    /// A compensator FMU with the given Boolean parameters set.
-    Fmu(PathBuf, Vec<(String, bool)>),
-}
-
 /// A recorded closed-loop run.
 #[derive(Clone, Debug)]
 pub struct LoopRun {
@@ -506,40 +501,84 @@ impl LoopRun {
     }
 }
 
-fn add_compensation(s: &mut System, compensation: &Compensation, target: &str) -> Result<(), String> {
-    if let Compensation::Fmu(path, flags) = compensation {
-        s.add_fmu("comp", path).map_err(master)?;
-        for (k, v) in flags {
-            s.set("comp", k, Value::Boolean(*v)).map_err(master)?;
-        }
-        s.connect("arm.q_meas_*", "comp.q_*").map_err(master)?;
-        s.connect("arm.qd_meas_*", "comp.qd_*").map_err(master)?;
-        s.connect("comp.tau_comp_*", &format!("{target}.tau_comp_*")).map_err(master)?;
-    }
-    Ok(())
+/// A path as a system file writes it: '/'-separated on every platform.
+fn spec_path(p: &Path) -> String {
+    p.to_string_lossy().replace('\\', "/")
 }
 
-/// The task-space tracking loop of Table 1: arm, task-space controller, and a compensator,
-/// from the start state of [`tracking_start`], for `settings.tracking_duration`.
-pub fn tracking_run(arm_fmu: &Path, controller: &Path, compensation: &Compensation, settings: &Settings) -> Result<LoopRun, String> {
+/// The units and connections every closed loop shares: `arm` measured by the controller
+/// `ctl`, whose torques drive the arm; with a compensator `comp`, fed the same measurements,
+/// adding `tau_comp` in the controller. Paths as the system file will hold them.
+fn closed_loop(arm: &Path, controller: &Path, compensator: Option<&Path>, arm_parameters: BTreeMap<String, Value>, controller_parameters: BTreeMap<String, Value>) -> SystemSpec {
+    let connect = |from: &str, to: &str| ConnectionSpec { from: from.into(), to: to.into() };
+    let mut fmu = vec![
+        FmuEntry { name: "arm".into(), path: spec_path(arm), parameters: arm_parameters },
+        FmuEntry { name: "ctl".into(), path: spec_path(controller), parameters: controller_parameters },
+    ];
+    let mut connection = vec![connect("arm.q_meas_*", "ctl.q_*"), connect("arm.qd_meas_*", "ctl.qd_*"), connect("ctl.tau_*", "arm.tau_*")];
+    if let Some(c) = compensator {
+        fmu.push(FmuEntry { name: "comp".into(), path: spec_path(c), parameters: BTreeMap::new() });
+        connection.extend([connect("arm.q_meas_*", "comp.q_*"), connect("arm.qd_meas_*", "comp.qd_*"), connect("comp.tau_comp_*", "ctl.tau_comp_*")]);
+    }
+    SystemSpec {
+        fmu,
+        connection,
+        simulation: SimulationSpec { start: 0.0, stop: 0.0, step: 0.0, algorithm: Algorithm::GaussSeidel, record: Vec::new(), record_every: 1 },
+    }
+}
+
+/// The task-space tracking loop of Table 1 as a system: the arm in `arm` started on the
+/// reference ([`tracking_start`]), the task-space controller, and the compensator FMU if
+/// any, for `settings.tracking_duration` at `settings.step`. FMU paths are taken as given
+/// (relative to where the system file will be, or absolute).
+pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>, settings: &Settings) -> Result<SystemSpec, String> {
     let nominal = ArmConfig::default().arm;
     let (_, (q0, qd0)) = tracking_start(&nominal)?;
-    let mut s = System::new();
-    s.add_fmu("arm", arm_fmu).map_err(master)?.add_fmu("ctl", controller).map_err(master)?;
+    let mut arm_parameters = BTreeMap::new();
     for i in 0..q0.len() {
-        s.set("arm", &format!("q0_{}", i + 1), Value::Real(q0[i])).map_err(master)?;
-        s.set("arm", &format!("qd0_{}", i + 1), Value::Real(qd0[i])).map_err(master)?;
+        arm_parameters.insert(format!("q0_{}", i + 1), Value::Real(q0[i]));
+        arm_parameters.insert(format!("qd0_{}", i + 1), Value::Real(qd0[i]));
     }
-    s.connect("arm.q_meas_*", "ctl.q_*").map_err(master)?;
-    s.connect("arm.qd_meas_*", "ctl.qd_*").map_err(master)?;
-    s.connect("ctl.tau_*", "arm.tau_*").map_err(master)?;
-    add_compensation(&mut s, compensation, "ctl")?;
+    let mut spec = closed_loop(arm, controller, compensator, arm_parameters, BTreeMap::new());
     let mut record: Vec<String> = ["ctl.error_x", "ctl.error_y", "ctl.x_ref", "ctl.y_ref", "arm.x", "arm.y"].iter().map(|s| s.to_string()).collect();
+    record.extend((1..=q0.len()).map(|i| format!("arm.q_{i}")));
     record.extend((1..=q0.len()).map(|i| format!("arm.qd_{i}")));
     record.extend((1..=q0.len()).map(|i| format!("ctl.tau_{i}")));
-    let mut sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &record).map_err(master)?;
-    sim.run_until(settings.tracking_duration).map_err(master)?;
-    Ok(LoopRun { columns: sim.columns(), rows: sim.take_rows() })
+    spec.simulation.stop = settings.tracking_duration;
+    spec.simulation.step = settings.step;
+    spec.simulation.record = record;
+    Ok(spec)
+}
+
+/// The joint-space loop with gravity compensation as a system: the arm with its base turned
+/// 90° starting at the hanging pose, the joint controller on its built-in sequence with
+/// `settings.joint_kp`/`joint_kd` on every joint, and the compensator FMU if any.
+pub fn gravity_compensation_system(arm: &Path, controller: &Path, compensator: Option<&Path>, settings: &Settings) -> SystemSpec {
+    let n = 4;
+    let arm_parameters = BTreeMap::from([("base_angle".to_owned(), Value::Real(PI / 2.0)), ("q0_1".to_owned(), Value::Real(-PI / 2.0))]);
+    let mut gains = BTreeMap::new();
+    for i in 1..=n {
+        gains.insert(format!("kp_{i}"), Value::Real(settings.joint_kp));
+        gains.insert(format!("kd_{i}"), Value::Real(settings.joint_kd));
+    }
+    let mut spec = closed_loop(arm, controller, compensator, arm_parameters, gains);
+    let mut record: Vec<String> = (1..=n).map(|i| format!("ctl.q_target_{i}")).collect();
+    record.extend((1..=n).map(|i| format!("arm.q_{i}")));
+    record.extend((1..=n).map(|i| format!("ctl.tau_{i}")));
+    spec.simulation.stop = crate::models::controllers::SEQUENCE_SEGMENT_S * crate::models::controllers::JOINT_SEQUENCE.len() as f64;
+    spec.simulation.step = settings.step;
+    spec.simulation.record = record;
+    spec
+}
+
+/// Runs a closed-loop system (FMU paths relative to `base`), recording every step.
+pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
+    let s = System::from_spec(spec, base).map_err(master)?;
+    let sim = &spec.simulation;
+    let mut run = s.initialize(sim.start, sim.step, sim.algorithm, &sim.record).map_err(master)?;
+    run.record_every(sim.record_every);
+    run.run_until(sim.stop).map_err(master)?;
+    Ok(LoopRun { columns: run.columns(), rows: run.take_rows() })
 }
 
 /// Mean squared tracking error of a run [m²]: the mean over samples and both coordinates
@@ -548,25 +587,6 @@ pub fn tracking_mse(run: &LoopRun) -> f64 {
     let ex = run.column("ctl.error_x").unwrap_or_default();
     let ey = run.column("ctl.error_y").unwrap_or_default();
     ex.iter().zip(&ey).map(|(a, b)| a * a + b * b).sum::<f64>() / (2.0 * ex.len().max(1) as f64)
-}
-
-/// The joint-space loop with gravity compensation: the arm with its base turned 90°
-/// starting at the hanging pose, the joint controller on its built-in sequence.
-pub fn gravity_compensation_run(arm_fmu: &Path, controller: &Path, compensation: &Compensation, settings: &Settings) -> Result<LoopRun, String> {
-    let n = 4;
-    let mut parameters: Vec<(String, Value)> = vec![("base_angle".into(), Value::Real(PI / 2.0))];
-    parameters.push(("q0_1".into(), Value::Real(-PI / 2.0)));
-    let p: Vec<(&str, Value)> = parameters.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
-    let gains = vec![(settings.joint_kp, settings.joint_kd); n];
-    let mut s = joint_loop(arm_fmu, controller, &p, &gains, None)?;
-    add_compensation(&mut s, compensation, "ctl")?;
-    let mut record: Vec<String> = (1..=n).map(|i| format!("ctl.q_target_{i}")).collect();
-    record.extend((1..=n).map(|i| format!("arm.q_{i}")));
-    record.extend((1..=n).map(|i| format!("ctl.tau_{i}")));
-    let mut sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &record).map_err(master)?;
-    let duration = crate::models::controllers::SEQUENCE_SEGMENT_S * crate::models::controllers::JOINT_SEQUENCE.len() as f64;
-    sim.run_until(duration).map_err(master)?;
-    Ok(LoopRun { columns: sim.columns(), rows: sim.take_rows() })
 }
 
 /// RMS of q_target − q per joint over a joint-space run [rad].

@@ -161,66 +161,56 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
     results.gravity_max = worst;
     lap(&mut results, "training gravity net", log);
 
-    // The NN compensator FMUs.
-    let nn_sim = fmu_dir.join("NnCompensator.fmu");
-    let mut sources = friction_files[0].clone();
-    sources.push(("gravity.json".into(), gravity_path.clone()));
-    export_fmu(
-        &FmuSpec {
-            identifier: "NnCompensator".into(),
-            model: ModelSpec::NnCompensator {
-                joints: 4,
-                friction: friction_files[0].iter().map(|(n, _)| n.clone()).collect(),
-                gravity: Some("gravity.json".into()),
-                enable_friction: true,
-                enable_gravity: true,
-            },
-        },
-        &sources,
-        &nn_sim,
-    )?;
-    let nn_real = fmu_dir.join("NnCompensatorReal.fmu");
-    export_fmu(
-        &FmuSpec {
-            identifier: "NnCompensatorReal".into(),
-            model: ModelSpec::NnCompensator {
-                joints: 4,
-                friction: friction_files[1].iter().map(|(n, _)| n.clone()).collect(),
-                gravity: None,
-                enable_friction: true,
-                enable_gravity: false,
-            },
-        },
-        &friction_files[1],
-        &nn_real,
-    )?;
+    // The NN compensator FMUs: the full one (both nets) is the deliverable; the loops use
+    // ones exported with only the part they compensate.
+    let nn_fmu = |identifier: &str, friction: &[(String, PathBuf)], gravity: bool| -> Result<PathBuf, String> {
+        let path = fmu_dir.join(format!("{identifier}.fmu"));
+        let mut sources = friction.to_vec();
+        if gravity {
+            sources.push(("gravity.json".into(), gravity_path.clone()));
+        }
+        let model = ModelSpec::NnCompensator {
+            joints: 4,
+            friction: friction.iter().map(|(n, _)| n.clone()).collect(),
+            gravity: gravity.then(|| "gravity.json".to_owned()),
+            enable_friction: !friction.is_empty(),
+            enable_gravity: gravity,
+        };
+        export_fmu(&FmuSpec { identifier: identifier.into(), model }, &sources, &path)?;
+        Ok(path)
+    };
+    nn_fmu("NnCompensator", &friction_files[0], true)?;
+    let nn_friction = nn_fmu("NnFrictionCompensator", &friction_files[0], false)?;
+    let nn_real = nn_fmu("NnFrictionCompensatorReal", &friction_files[1], false)?;
+    let nn_gravity = nn_fmu("NnGravityCompensator", &[], true)?;
 
-    // Table 1 and the gravity-compensation runs, in parallel.
-    let friction_only = vec![("enable_gravity".to_owned(), false), ("enable_friction".to_owned(), true)];
-    let gravity_only = vec![("enable_gravity".to_owned(), true), ("enable_friction".to_owned(), false)];
-    let loops: Vec<(&str, bool, PathBuf, Compensation)> = vec![
-        ("tracking_sim_perfect", true, fmus.arm.clone(), Compensation::Fmu(fmus.ideal.clone(), friction_only.clone())),
-        ("tracking_sim_nn", true, fmus.arm.clone(), Compensation::Fmu(nn_sim.clone(), friction_only.clone())),
-        ("tracking_sim_none", true, fmus.arm.clone(), Compensation::None),
-        ("tracking_real_nn", true, fmus.arm_real.clone(), Compensation::Fmu(nn_real.clone(), vec![("enable_friction".to_owned(), true)])),
-        ("tracking_real_none", true, fmus.arm_real.clone(), Compensation::None),
-        ("joint_ideal", false, fmus.arm.clone(), Compensation::Fmu(fmus.ideal_vertical.clone(), gravity_only.clone())),
-        ("joint_nn", false, fmus.arm.clone(), Compensation::Fmu(nn_sim.clone(), gravity_only.clone())),
-        ("joint_none", false, fmus.arm.clone(), Compensation::None),
+    // Table 1 and the gravity-compensation runs as system files (paths relative to
+    // out/systems) and SSP archives, run in parallel.
+    let systems_dir = out.join("systems");
+    std::fs::create_dir_all(&systems_dir).map_err(|e| format!("{}: {e}", systems_dir.display()))?;
+    let rel = |p: &Path| Path::new("..").join(p.strip_prefix(out).unwrap_or(p));
+    let (arm, arm_real) = (rel(&fmus.arm), rel(&fmus.arm_real));
+    let (task, joint) = (rel(&fmus.task_controller), rel(&fmus.joint_controller));
+    let tracking = |arm: &Path, comp: Option<PathBuf>| tracking_system(arm, &task, comp.as_deref(), settings);
+    let joint_space = |comp: Option<PathBuf>| Ok::<_, String>(gravity_compensation_system(&arm, &joint, comp.as_deref(), settings));
+    let loops: Vec<(&str, SystemSpec)> = vec![
+        ("tracking_sim_perfect", tracking(&arm, Some(rel(&fmus.ideal_friction)))?),
+        ("tracking_sim_nn", tracking(&arm, Some(rel(&nn_friction)))?),
+        ("tracking_sim_none", tracking(&arm, None)?),
+        ("tracking_real_nn", tracking(&arm_real, Some(rel(&nn_real)))?),
+        ("tracking_real_none", tracking(&arm_real, None)?),
+        ("joint_ideal", joint_space(Some(rel(&fmus.ideal_gravity)))?),
+        ("joint_nn", joint_space(Some(rel(&nn_gravity)))?),
+        ("joint_none", joint_space(None)?),
     ];
+    for (name, spec) in &loops {
+        let toml = systems_dir.join(format!("{name}.toml"));
+        let text = format!("# The {name} loop of `neurarm paper`; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}", spec.to_toml()?);
+        write_text_atomic(&toml, &text).map_err(io(&toml))?;
+        crate::master::ssp::write_ssp(spec, &systems_dir, &out.join(format!("{name}.ssp")))?;
+    }
     let b = bar(loops.len() as u64, "closed loops");
-    let loop_runs = parallel(
-        loops.clone(),
-        settings.threads,
-        |(_, tracking, arm, comp)| {
-            if tracking {
-                tracking_run(&arm, &fmus.task_controller, &comp, settings)
-            } else {
-                gravity_compensation_run(&arm, &fmus.joint_controller, &comp, settings)
-            }
-        },
-        || b.inc(1),
-    )?;
+    let loop_runs = parallel(loops.clone(), settings.threads, |(_, spec)| run_loop(&spec, &systems_dir), || b.inc(1))?;
     b.finish_and_clear();
     for (k, run) in loop_runs.iter().enumerate() {
         let name = loops[k].0;

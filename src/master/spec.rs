@@ -46,7 +46,7 @@ pub struct FmuEntry {
     /// Path of the `.fmu`, relative to the system file.
     pub path: String,
     /// Parameters (and unconnected inputs) to set before initialisation.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub parameters: BTreeMap<String, Value>,
 }
 
@@ -95,6 +95,12 @@ impl SystemSpec {
             return Err(format!("{origin}: [simulation] needs a positive step and stop ≥ start (got start {}, stop {}, step {})", s.start, s.stop, s.step));
         }
         Ok(spec)
+    }
+
+    /// The system file's text; [`SystemSpec::from_toml`] reads it back unchanged (reals
+    /// are written in their shortest exact form).
+    pub fn to_toml(&self) -> Result<String, String> {
+        toml::to_string(self).map_err(|e| format!("writing the system file: {e}"))
     }
 }
 

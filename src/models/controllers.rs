@@ -127,7 +127,7 @@ impl TaskSpaceControllerModel {
         values.reals[self.error[1] as usize] = position.y - x.y;
         let reference = TaskReference { position, velocity, acceleration };
         let u = task_space_acceleration(&self.model, q, qd, &reference, &gains)
-            .ok_or_else(|| format!("singular pose at t = {} s, q = {q:?}: J has lost rank, J# does not exist", self.time))?;
+            .ok_or_else(|| format!("no control law at t = {} s: the inputs q = {q:?}, qd = {qd:?} are not finite", self.time))?;
         let tau = computed_torque(&self.model, q, qd, &u, comp);
         for (&vr, t) in self.tau.iter().zip(tau.iter()) {
             values.reals[vr as usize] = *t;
@@ -358,10 +358,10 @@ impl Model for IdealCompensatorModel {
 /// Equations of the task-space controller, for `documentation/index.html`.
 pub const TASK_SPACE_HTML: &str = "<p>Reference (centre c = (centre_x, centre_y)): \
 <code>x_d(t) = c + (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))</code> [m].</p>\
-<p><code>u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J#J) q̇</code>, with J# = Jᵀ(JJᵀ)⁻¹; \
-the last term damps the self-motion of the redundant joints, which the task does not fix.</p>\
+<p><code>u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J#J) q̇</code>, with J# the Moore–Penrose pseudo-inverse \
+(Jᵀ(JJᵀ)⁻¹ away from singular poses; at a singular pose the direction J has lost gets no acceleration); the last term damps the self-motion of the redundant joints, which the task does not fix.</p>\
 <p><code>τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + tau_comp</code>, Ĥ, Ĉ, ĝ from the controller's own arm model \
-(in resources/neurarm.toml). At a singular pose (J loses rank) the step fails with fmi2Error.</p>";
+(in resources/neurarm.toml). Non-finite inputs fail the step with fmi2Error.</p>";
 
 /// Equations of the joint controller, for `documentation/index.html`.
 pub const JOINT_HTML: &str = "<p><code>τ_i = tau_comp_i + kp_i (q_d,i − q_i) + kd_i (q̇_d,i − q̇_i)</code>; \
