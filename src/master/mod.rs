@@ -491,19 +491,38 @@ fn check_value(info: &VariableInfo, value: &Value) -> Result<(), String> {
     Ok(())
 }
 
-/// Precomputed transfers: per unit, the outputs it gives and where each goes.
+/// The inputs of one unit of one base type fed by one source unit: set in one call.
+struct Transfer {
+    base: BaseType,
+    to: usize,
+    /// Value references of the inputs set.
+    vrs: Vec<u32>,
+    /// For each, its index in the source unit's read list of that type.
+    from: Vec<usize>,
+    /// Some of these inputs feed the target's outputs directly.
+    feeds: bool,
+}
+
+/// Precomputed transfers: per unit, the outputs it gives and where they go.
 struct Plan {
     resolve_order: Vec<usize>,
     step_order: Vec<usize>,
-    /// Per unit: (value references to read, index of each in the links of that unit).
+    /// Position of each unit in the step order.
+    step_position: Vec<usize>,
+    /// Per unit: the units its outputs go to.
+    consumers: Vec<Vec<usize>>,
+    /// Per unit: value references to read, by type.
     out_real: Vec<Vec<u32>>,
     out_int: Vec<Vec<u32>>,
     out_bool: Vec<Vec<u32>>,
-    /// Per unit: links leaving it, as (type slot, index in that unit's read list, target unit, target vr, feeds_through).
-    targets: Vec<Vec<(BaseType, usize, usize, u32, bool)>>,
+    /// Per unit: its outputs' transfers, one per (target unit, type).
+    transfers: Vec<Vec<Transfer>>,
     buf_real: Vec<f64>,
     buf_int: Vec<i32>,
     buf_bool: Vec<i32>,
+    set_real: Vec<f64>,
+    set_int: Vec<i32>,
+    set_bool: Vec<i32>,
     dirty: Vec<bool>,
 }
 
@@ -511,7 +530,8 @@ impl Plan {
     fn new(system: &System, resolve_order: Vec<usize>, step_order: Vec<usize>) -> Self {
         let n = system.units.len();
         let (mut out_real, mut out_int, mut out_bool) = (vec![Vec::new(); n], vec![Vec::new(); n], vec![Vec::new(); n]);
-        let mut targets = vec![Vec::new(); n];
+        let mut transfers: Vec<Vec<Transfer>> = (0..n).map(|_| Vec::new()).collect();
+        let mut consumers = vec![Vec::new(); n];
         for l in &system.links {
             let list = match l.base {
                 BaseType::Real => &mut out_real[l.from_unit],
@@ -522,21 +542,54 @@ impl Plan {
                 list.push(l.from_vr);
                 list.len() - 1
             });
-            targets[l.from_unit].push((l.base, k, l.to_unit, l.to_vr, l.feeds_through));
+            let group = match transfers[l.from_unit].iter().position(|t| t.to == l.to_unit && t.base == l.base) {
+                Some(g) => g,
+                None => {
+                    transfers[l.from_unit].push(Transfer { base: l.base, to: l.to_unit, vrs: Vec::new(), from: Vec::new(), feeds: false });
+                    transfers[l.from_unit].len() - 1
+                }
+            };
+            let t = &mut transfers[l.from_unit][group];
+            t.vrs.push(l.to_vr);
+            t.from.push(k);
+            t.feeds |= l.feeds_through;
+            if !consumers[l.from_unit].contains(&l.to_unit) {
+                consumers[l.from_unit].push(l.to_unit);
+            }
         }
         let widest = |v: &Vec<Vec<u32>>| v.iter().map(Vec::len).max().unwrap_or(0);
+        let widest_set = |base: BaseType| transfers.iter().flatten().filter(|t| t.base == base).map(|t| t.vrs.len()).max().unwrap_or(0);
+        let mut step_position = vec![0; n];
+        for (i, &u) in step_order.iter().enumerate() {
+            step_position[u] = i;
+        }
         Self {
             buf_real: vec![0.0; widest(&out_real)],
             buf_int: vec![0; widest(&out_int)],
             buf_bool: vec![0; widest(&out_bool)],
+            set_real: vec![0.0; widest_set(BaseType::Real)],
+            set_int: vec![0; widest_set(BaseType::Integer)],
+            set_bool: vec![0; widest_set(BaseType::Boolean)],
             resolve_order,
             step_order,
+            step_position,
+            consumers,
             out_real,
             out_int,
             out_bool,
-            targets,
+            transfers,
             dirty: vec![false; n],
         }
+    }
+
+    /// Within a Gauss–Seidel sweep, after the unit at `position` has stepped: whether `unit`,
+    /// whose inputs just changed, may leave its outputs unread until it steps itself. It may
+    /// when it steps later in this sweep and none of its consumers steps before it: then no
+    /// one would use the outputs in between (they are read again once it has stepped).
+    fn can_wait(&self, unit: usize, position: Option<usize>) -> bool {
+        let Some(now) = position else { return false };
+        let at = self.step_position[unit];
+        at > now && self.consumers[unit].iter().all(|&c| self.step_position[c] <= now || self.step_position[c] > at)
     }
 }
 
@@ -602,17 +655,19 @@ impl Simulation {
     }
 
     /// Passes the outputs of the dirty units on, in resolve order; a target whose outputs
-    /// follow its inputs becomes dirty in turn.
-    fn resolve_dirty(&mut self, time: Option<f64>) -> Result<(), MasterError> {
-        let plan = &mut self.plan;
-        for &u in &plan.resolve_order {
-            if !plan.dirty[u] {
+    /// follow its inputs becomes dirty in turn, unless (in a Gauss–Seidel sweep, `position`
+    /// being the step position just done) it will step later and nobody needs it before.
+    fn resolve_dirty(&mut self, time: Option<f64>, position: Option<usize>) -> Result<(), MasterError> {
+        for i in 0..self.plan.resolve_order.len() {
+            let u = self.plan.resolve_order[i];
+            if !self.plan.dirty[u] {
                 continue;
             }
-            plan.dirty[u] = false;
-            if plan.targets[u].is_empty() {
+            self.plan.dirty[u] = false;
+            if self.plan.transfers[u].is_empty() {
                 continue;
             }
+            let plan = &mut self.plan;
             let units = &mut self.system.units;
             let mark = capture::mark();
             let (nr, ni, nb) = (plan.out_real[u].len(), plan.out_int[u].len(), plan.out_bool[u].len());
@@ -625,19 +680,42 @@ impl Simulation {
             if nb > 0 {
                 units[u].instance.get_boolean(&plan.out_bool[u], &mut plan.buf_bool[..nb]).map_err(|e| units[u].fail("fmi2GetBoolean", e, mark, time))?;
             }
-            for &(base, k, to, vr, feeds) in &plan.targets[u] {
-                let target = &mut units[to];
-                let r = match base {
-                    BaseType::Real => target.instance.set_real(&[vr], &[plan.buf_real[k]]),
-                    BaseType::Integer => target.instance.set_integer(&[vr], &[plan.buf_int[k]]),
-                    _ => target.instance.set_boolean(&[vr], &[plan.buf_bool[k]]),
+            for t in &plan.transfers[u] {
+                let m = t.vrs.len();
+                let target = &mut units[t.to];
+                let r = match t.base {
+                    BaseType::Real => {
+                        for (v, &k) in plan.set_real.iter_mut().zip(&t.from) {
+                            *v = plan.buf_real[k];
+                        }
+                        target.instance.set_real(&t.vrs, &plan.set_real[..m])
+                    }
+                    BaseType::Integer => {
+                        for (v, &k) in plan.set_int.iter_mut().zip(&t.from) {
+                            *v = plan.buf_int[k];
+                        }
+                        target.instance.set_integer(&t.vrs, &plan.set_int[..m])
+                    }
+                    _ => {
+                        for (v, &k) in plan.set_bool.iter_mut().zip(&t.from) {
+                            *v = plan.buf_bool[k];
+                        }
+                        target.instance.set_boolean(&t.vrs, &plan.set_bool[..m])
+                    }
                 };
                 r.map_err(|e| {
-                    let name = target.variables.iter().find(|(_, v)| v.value_reference == vr && v.base == base).map(|(n, _)| n.clone()).unwrap_or_default();
-                    target.fail("fmi2Set (connection)", e, mark, time).variable(&name)
+                    let names: Vec<String> = t
+                        .vrs
+                        .iter()
+                        .filter_map(|&vr| target.variables.iter().find(|(_, v)| v.value_reference == vr && v.base == t.base).map(|(n, _)| n.clone()))
+                        .collect();
+                    target.fail("fmi2Set (connection)", e, mark, time).variable(&names.join(", "))
                 })?;
-                if feeds {
-                    plan.dirty[to] = true;
+            }
+            for g in 0..self.plan.transfers[u].len() {
+                let (to, feeds) = (self.plan.transfers[u][g].to, self.plan.transfers[u][g].feeds);
+                if feeds && !self.plan.can_wait(to, position) {
+                    self.plan.dirty[to] = true;
                 }
             }
         }
@@ -646,7 +724,7 @@ impl Simulation {
 
     fn resolve_all(&mut self, time: Option<f64>) -> Result<(), MasterError> {
         self.plan.dirty.fill(true);
-        self.resolve_dirty(time)
+        self.resolve_dirty(time, None)
     }
 
     fn record(&mut self) -> Result<(), MasterError> {
@@ -693,7 +771,7 @@ impl Simulation {
                     let u = self.plan.step_order[i];
                     self.do_step(u, t, h)?;
                     self.plan.dirty[u] = true;
-                    self.resolve_dirty(Some(t))?;
+                    self.resolve_dirty(Some(t), Some(i))?;
                 }
             }
             Algorithm::Jacobi => {
@@ -763,7 +841,7 @@ impl Simulation {
         }
         self.set_value(ui, v, &value).map_err(|e| e.at(self.time))?;
         self.plan.dirty[ui] = true;
-        self.resolve_dirty(Some(self.time))
+        self.resolve_dirty(Some(self.time), None)
     }
 
     /// A handle on a Real variable ("unit.variable") for fast reads with [`Self::get_reals`]
@@ -792,7 +870,7 @@ impl Simulation {
             unit.instance.set_real(&[h.value_reference], &[x]).map_err(|e| unit.fail("fmi2SetReal", e, mark, Some(self.time)))?;
             self.plan.dirty[h.unit] = true;
         }
-        self.resolve_dirty(Some(self.time))
+        self.resolve_dirty(Some(self.time), None)
     }
 
     /// Reads Real variables through handles.

@@ -1,0 +1,134 @@
+//! The NN-compensated tracking loop of Table 1 (arm, NN friction compensator, task-space
+//! controller; 1 ms communication step), one step at a time:
+//! - `master`: the three FMUs through our master (Gauss–Seidel, nothing recorded);
+//! - `in_process`: the same computation as plain Rust calls, no FMI: arm step and sensors,
+//!   the four friction nets, the task-space law and computed torque.
+//!
+//! The FMUs and nets go to `<target>/closed-loop-bench/` (its `system.toml` is the loop), where
+//! `benches/python/loop_ratio.py` has fmpy drive the same FMUs. `scripts/bench-loop` runs both
+//! and prints the ratios and real-time factors.
+
+use std::path::PathBuf;
+
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use nalgebra::{DMatrix, Vector2};
+use neurarm::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
+use neurarm::config::ArmConfig;
+use neurarm::control::{computed_torque, paper_reference, task_space_acceleration, TaskReference, TaskSpaceGains};
+use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Settings, REFERENCE_CENTRE};
+use neurarm::master::System;
+use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
+use neurarm::nn::{train, Mlp, Signal, TrainSettings, WeightsFile};
+
+const STEP: f64 = 1e-3;
+
+fn bench_dir() -> PathBuf {
+    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"));
+    target.join("closed-loop-bench")
+}
+
+/// Friction nets of the nominal arm (10 hidden neurons, as `neurarm paper` trains them), trained
+/// briefly on its friction law: their cost per evaluation is what matters here.
+fn friction_nets() -> Vec<WeightsFile> {
+    (0..4)
+        .map(|j| {
+            let law = JointFriction::default_for_joint(j);
+            let v: Vec<f64> = (0..201).map(|k| -5.0 + 0.05 * k as f64).collect();
+            let x = DMatrix::from_row_slice(1, v.len(), &v);
+            let t = DMatrix::from_fn(1, v.len(), |_, c| law.torque(v[c]));
+            let settings = TrainSettings { hidden: 10, epochs: 30, restarts: 1, seed: j as u64, ..TrainSettings::default() };
+            let trained = train(&x, &t, &settings, &mut |_| {}).expect("training");
+            let signal = |name: String, unit: &str| Signal { name, unit: unit.into() };
+            WeightsFile::new(&trained.net, vec![signal(format!("qd_{}", j + 1), "rad/s")], vec![signal(format!("tau_friction_{}", j + 1), "N.m")], settings, trained.report)
+        })
+        .collect()
+}
+
+fn loop_step(c: &mut Criterion) {
+    let dir = bench_dir();
+    let fmus = build_fmus(&dir).expect("FMUs");
+    let nets = friction_nets();
+    let mut sources = Vec::new();
+    for (j, net) in nets.iter().enumerate() {
+        let path = dir.join(format!("friction_{}.json", j + 1));
+        std::fs::write(&path, net.to_json()).expect("net written");
+        sources.push((format!("friction_{}.json", j + 1), path));
+    }
+    let comp = dir.join("NnFrictionCompensator.fmu");
+    let model = ModelSpec::NnCompensator { joints: 4, friction: sources.iter().map(|s| s.0.clone()).collect(), gravity: None, enable_friction: true, enable_gravity: false };
+    export_fmu(&FmuSpec { identifier: "NnFrictionCompensator".into(), model }, &sources, &comp).expect("compensator FMU");
+    let settings = Settings::quick();
+    let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &settings).expect("system");
+    spec.simulation.record.clear();
+    std::fs::write(dir.join("system.toml"), spec.to_toml().expect("toml")).expect("system written");
+
+    let system = System::from_spec(&spec, &dir).expect("system");
+    let mut sim = system.initialize(0.0, STEP, spec.simulation.algorithm, &[]).expect("initialised");
+    c.bench_function("closed_loop_1ms/master", |b| b.iter(|| sim.step().expect("step")));
+
+    // The same loop without FMI; first checked to compute what the master does.
+    let mut plain = PlainLoop::new(nets.iter().map(|w| w.network().expect("net")).collect());
+    let mut check = System::from_spec(&spec, &dir).expect("system").initialize(0.0, STEP, spec.simulation.algorithm, &["arm.x".into(), "arm.y".into()]).expect("initialised");
+    for k in 0..2000 {
+        check.step().expect("step");
+        let [x, y, ..] = plain.step();
+        let row = &check.rows()[k + 1];
+        assert!((row[1] - x).abs() < 1e-9 && (row[2] - y).abs() < 1e-9, "the plain loop left the master's at step {k}: {row:?} vs ({x}, {y})");
+    }
+    c.bench_function("closed_loop_1ms/in_process", |b| b.iter(|| black_box(plain.step())));
+}
+
+/// The loop as plain Rust calls: what the three FMUs compute, in the master's order.
+struct PlainLoop {
+    config: ArmConfig,
+    arm: ArmSimulator,
+    sensors: Sensors,
+    model: ArmParams,
+    nets: Vec<Mlp>,
+    state: ArmState,
+    time: f64,
+    q: [f64; 4],
+    qd: [f64; 4],
+    comp: [f64; 4],
+    hidden: [f64; 10],
+    tau: Vec<f64>,
+}
+
+impl PlainLoop {
+    fn new(nets: Vec<Mlp>) -> Self {
+        let config = ArmConfig::default();
+        let (arm, sensors) = config.build().expect("arm");
+        let model = config.arm.clone().frictionless();
+        let (_, (q0, qd0)) = tracking_start(&config.arm).expect("start");
+        let mut me = Self { config, arm, sensors, model, nets, state: ArmState { q: q0, qd: qd0 }, time: 0.0, q: [0.0; 4], qd: [0.0; 4], comp: [0.0; 4], hidden: [0.0; 10], tau: vec![0.0; 4] };
+        me.measure_and_control();
+        me
+    }
+
+    fn measure_and_control(&mut self) {
+        self.sensors.measure(&self.state, &mut self.q, &mut self.qd);
+        for (j, net) in self.nets.iter().enumerate() {
+            let mut out = [0.0];
+            net.evaluate_into(&[self.qd[j]], &mut self.hidden, &mut out);
+            self.comp[j] = out[0];
+        }
+        let centre = Vector2::new(REFERENCE_CENTRE[0], REFERENCE_CENTRE[1]);
+        let (position, velocity, acceleration) = paper_reference(self.time, centre);
+        black_box(position - end_effector_position(&self.model, &self.q));
+        let reference = TaskReference { position, velocity, acceleration };
+        let u = task_space_acceleration(&self.model, &self.q, &self.qd, &reference, &TaskSpaceGains::default()).expect("control law");
+        self.tau.copy_from_slice(computed_torque(&self.model, &self.q, &self.qd, &u, &self.comp).as_slice());
+    }
+
+    /// One communication step; the arm's end-effector outputs (x, y, ẋ, ẏ) after it.
+    fn step(&mut self) -> [f64; 4] {
+        self.arm.step(&mut self.state, &self.tau, STEP).expect("arm step");
+        self.time += STEP;
+        let outputs = end_effector_state(&self.config.arm, &self.state.q, &self.state.qd);
+        self.measure_and_control();
+        outputs
+    }
+}
+
+criterion_group!(benches, loop_step);
+criterion_main!(benches);
