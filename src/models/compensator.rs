@@ -2,7 +2,8 @@
 //!
 //! Inputs: joint angles `q_i` [rad] and velocities `qd_i` [rad/s]. Outputs: per joint the
 //! friction part `tau_friction_i` (joint i's friction net of `qd_i`), the gravity part
-//! `tau_gravity_i` (output i of the gravity net of all angles) and their sum over the enabled
+//! `tau_gravity_i` (output i of the gravity net of all angles, each wrapped into the turn
+//! [min, min + 2π) of the net's training data, as gravity is 2π-periodic) and their sum over the enabled
 //! parts, `tau_comp_i` [N·m]. Tunable Boolean parameters `enable_friction` and
 //! `enable_gravity` switch the parts; a disabled part's outputs are 0. The block is static:
 //! outputs follow the inputs at once (direct feedthrough), steps change nothing.
@@ -134,8 +135,12 @@ impl NnCompensatorModel {
         }
         match (&self.gravity, use_gravity) {
             (Some(g), true) => {
+                // Gravity is 2π-periodic in every revolute angle: bring each angle into the
+                // turn the net was trained on, [min, min + 2π) of its training data, so angles
+                // outside that range are not extrapolated.
                 for i in 0..n {
-                    self.x[i] = values.reals[l.q[i] as usize];
+                    let low = g.input_scaling.min[i];
+                    self.x[i] = low + (values.reals[l.q[i] as usize] - low).rem_euclid(std::f64::consts::TAU);
                 }
                 g.evaluate_into(&self.x, &mut self.hidden[..g.hidden()], &mut self.y);
             }
@@ -180,7 +185,8 @@ impl Model for NnCompensatorModel {
 /// The equations, for the FMU's `documentation/index.html`.
 pub const EQUATIONS_HTML: &str = "<p>Each net is <code>y = LW tanh(IW x̃ + b1) + b2</code> on inputs \
 scaled to [-1, 1] (mapminmax), with outputs scaled back to N·m. Per joint i:</p>\
-<p><code>tau_friction_i = f_i(qd_i)</code>, <code>tau_gravity = g(q_1, …, q_n)</code>, \
+<p><code>tau_friction_i = f_i(qd_i)</code>, <code>tau_gravity = g(q_1, …, q_n)</code> with each angle first \
+brought into the turn the gravity net was trained on, [min_i, min_i + 2π) (gravity is 2π-periodic), \
 <code>tau_comp_i = enable_friction·tau_friction_i + enable_gravity·tau_gravity_i</code>.</p>\
 <p>The block is static: its outputs follow its inputs without delay, and a step changes nothing. \
 The weights are read from <code>resources/</code> at instantiation; their CRC-32 is part of the \

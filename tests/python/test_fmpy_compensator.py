@@ -1,6 +1,8 @@
 """The NnCompensator FMU under fmpy: it validates; for 1000 random (q, qd) its outputs equal the
-Rust forward pass (`neurarm eval`) to 1e-12; the enable switches change exactly their terms;
+Rust forward pass (`neurarm eval`, angles wrapped into the gravity net's trained turn) to 1e-12; the enable switches change exactly their terms;
 missing or corrupt weights make instantiation fail with the reason logged."""
+import json
+import pathlib
 import shutil
 import subprocess
 
@@ -97,7 +99,12 @@ def test_outputs_equal_rust_forward_pass(neurarm, nets, fmu, tmp_path):
     names = [f"tau_friction_{i}" for i in range(1, J + 1)] + [f"tau_gravity_{i}" for i in range(1, J + 1)] + [f"tau_comp_{i}" for i in range(1, J + 1)]
     got = np.array([slave.outputs(q[s], qd[s], names) for s in range(1000)])
     friction = np.stack([rust_eval(neurarm, nets[f"f{j}"], {f"qd_{j}": qd[:, j - 1]}, tmp_path, f"f{j}")[f"tau_{j}"] for j in range(1, J + 1)], axis=1)
-    g = rust_eval(neurarm, nets["g"], {f"q_{i}": q[:, i - 1] for i in range(1, J + 1)}, tmp_path, "g")
+    # The FMU first brings each angle into the turn the gravity net was trained on (gravity is
+    # 2π-periodic); here that wrap is done with numpy before the Rust forward pass.
+    low = json.loads(pathlib.Path(nets["g"]).read_text())["input_scaling"]["min"]
+    wrapped = np.stack([low[i] + np.mod(q[:, i] - low[i], 2 * np.pi) for i in range(J)], axis=1)
+    assert (wrapped != q).any(axis=1).sum() > 100  # the draw reaches outside the trained turn
+    g = rust_eval(neurarm, nets["g"], {f"q_{i}": wrapped[:, i - 1] for i in range(1, J + 1)}, tmp_path, "g")
     gravity = np.stack([g[f"tau_{i}"] for i in range(1, J + 1)], axis=1)
     assert np.abs(got[:, :J] - friction).max() <= 1e-12
     assert np.abs(got[:, J:2 * J] - gravity).max() <= 1e-12
