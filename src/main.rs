@@ -59,6 +59,10 @@ enum Command {
         /// Worker threads (default: the cores, at most 4).
         #[arg(long)]
         threads: Option<usize>,
+        /// Seed of the training runs and the random test configurations (default 1); the
+        /// simulations themselves are deterministic.
+        #[arg(long)]
+        seed: Option<u64>,
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig,
@@ -198,8 +202,11 @@ fn run(cli: Cli) -> Result<()> {
                 Some(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", outcome.rows.len(), output.display()),
             }
         }
-        Command::Paper { output, quick, threads } => {
+        Command::Paper { output, quick, threads, seed } => {
             let mut settings = if quick { neurarm::experiments::Settings::quick() } else { neurarm::experiments::Settings::paper() };
+            if let Some(s) = seed {
+                settings.seed = s;
+            }
             if let Some(t) = threads {
                 settings.threads = t.max(1);
             }
