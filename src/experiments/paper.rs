@@ -117,7 +117,12 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
             let mine: Vec<&FrictionRun> = runs.iter().zip(&tasks).filter(|(_, t)| t.0 == real && t.1 == joint).map(|(r, _)| r).collect();
             let samples: Vec<(f64, f64)> = mine.iter().flat_map(|r| r.samples.iter().copied()).collect();
             let levels: usize = mine.iter().map(|r| r.levels.len()).sum();
-            let binned = bin_friction(&samples, settings.bin_width, settings.max_velocity);
+            let mut binned = bin_friction(&samples, settings.bin_width, settings.max_velocity);
+            if let Some(rest) = rest_pair(&mine) {
+                binned.retain(|b| b.0 != 0.0);
+                let at = binned.partition_point(|b| b.0 < 0.0);
+                binned.insert(at, rest);
+            }
             results.friction_counts.push((levels, binned.len()));
             let csv = data_dir.join(format!("friction_{tag}_joint{}.csv", joint + 1));
             write_rows(&csv, &["qd", "tau", "samples"], binned.iter().map(|&(v, t, n)| vec![v, t, n as f64]))?;
