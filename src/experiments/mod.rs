@@ -545,7 +545,7 @@ pub fn train_gravity_net(pairs: &[GravityPair], settings: &Settings, on_epoch: &
     let n = pairs[0].0.len();
     let x = DMatrix::from_fn(n, pairs.len(), |r, c| pairs[c].0[r]);
     let t = DMatrix::from_fn(n, pairs.len(), |r, c| pairs[c].1[r]);
-    let train_settings = TrainSettings { hidden: settings.gravity_hidden, epochs: settings.gravity_epochs, seed: settings.seed + 1, ..TrainSettings::default() };
+    let train_settings = TrainSettings { hidden: settings.gravity_hidden, epochs: settings.gravity_epochs, max_fail: 20, restarts: 3, seed: settings.seed + 1, ..TrainSettings::default() };
     let trained = train(&x, &t, &train_settings, &mut |e| on_epoch(e.epoch)).map_err(|e| format!("gravity net: {e}"))?;
     let signals = |prefix: &str, unit: &str| (0..n).map(|i| Signal { name: format!("{prefix}_{}", i + 1), unit: unit.into() }).collect();
     Ok(WeightsFile::new(&trained.net, signals("q", "rad"), signals("tau_gravity", "N.m"), train_settings, trained.report))
