@@ -276,7 +276,7 @@ pub fn report_markdown(r: &PaperResults, settings: &Settings, total_s: f64) -> S
         falling with speed, measurement noise and 16-bit encoders; its NN was trained on data measured on it.\n");
     let _ = writeln!(s, "## Friction identification\n");
     let _ = writeln!(s, "Constant torques on one joint, the others held by the joint controller; steady velocity per level; \
-        samples binned by {} rad/s over ±{} rad/s; mean torque per bin = one training pair. Data: `data/friction_*_joint*.csv`; nets: `nets/friction_*.json`.\n", settings.bin_width, settings.max_velocity);
+        samples binned by {} rad/s over ±{} rad/s; mean torque per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway torques; see `rest_pair`). Data: `data/friction_*_joint*.csv`; nets: `nets/friction_*.json`.\n", settings.bin_width, settings.max_velocity);
     let _ = writeln!(s, "| joint | sim levels | sim pairs | real levels | real pairs |");
     let _ = writeln!(s, "|---|---|---|---|---|");
     for j in 0..4 {
