@@ -71,6 +71,40 @@ pub trait Model: Send {
     fn load_state(&mut self, values: &Values, bytes: &[u8]) -> Result<(), String>;
 }
 
+/// A model without state: its outputs are a function of its inputs and parameters alone, so
+/// initialising, stepping and updating all just compute them, and there is no state to save.
+/// Every `StaticModel` is a [`Model`].
+pub trait StaticModel: Send {
+    /// The model's interface, fixed for the life of the instance.
+    fn description(&self) -> &ModelDescription;
+
+    /// Writes the outputs from the inputs and parameters in `values`.
+    fn compute(&mut self, values: &mut Values);
+}
+
+impl<T: StaticModel> Model for T {
+    fn description(&self) -> &ModelDescription {
+        StaticModel::description(self)
+    }
+    fn initialize(&mut self, values: &mut Values, _start_time: f64) -> Result<(), String> {
+        self.compute(values);
+        Ok(())
+    }
+    fn update_outputs(&mut self, values: &mut Values) -> Result<(), String> {
+        self.compute(values);
+        Ok(())
+    }
+    fn do_step(&mut self, values: &mut Values, _time: f64, _step: f64) -> Result<(), String> {
+        self.compute(values);
+        Ok(())
+    }
+    fn reset(&mut self) {}
+    fn save_state(&self, _out: &mut Vec<u8>) {}
+    fn load_state(&mut self, _values: &Values, bytes: &[u8]) -> Result<(), String> {
+        super::codec::Reader::new(bytes).finish()
+    }
+}
+
 /// Makes a model from the FMU's `resources/` folder. The GUID is checked by the layer against
 /// the returned model's description.
 pub type ModelFactory = fn(resources: &std::path::Path) -> Result<Box<dyn Model>, String>;

@@ -8,9 +8,8 @@
 //! `enable_gravity` switch the parts; a disabled part's outputs are 0. The block is static:
 //! outputs follow the inputs at once (direct feedthrough), steps change nothing.
 
-use crate::fmi2::codec::Reader;
 use crate::fmi2::description::{Causality, Kind, ModelDescription, TableBuilder, Variability};
-use crate::fmi2::model::{Model, Values};
+use crate::fmi2::model::{StaticModel, Values};
 use crate::nn::{Mlp, WeightsFile};
 
 /// Value references of the compensator's variables.
@@ -117,6 +116,13 @@ impl NnCompensatorModel {
         })
     }
 
+}
+
+impl StaticModel for NnCompensatorModel {
+    fn description(&self) -> &ModelDescription {
+        &self.description
+    }
+
     fn compute(&mut self, values: &mut Values) {
         let l = &self.layout;
         let n = l.q.len();
@@ -150,35 +156,6 @@ impl NnCompensatorModel {
             values.reals[l.gravity[i] as usize] = self.y[i];
             values.reals[l.total[i] as usize] = values.reals[l.friction[i] as usize] + self.y[i];
         }
-    }
-}
-
-impl Model for NnCompensatorModel {
-    fn description(&self) -> &ModelDescription {
-        &self.description
-    }
-
-    fn initialize(&mut self, values: &mut Values, _start_time: f64) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-
-    fn update_outputs(&mut self, values: &mut Values) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-
-    fn do_step(&mut self, values: &mut Values, _time: f64, _step: f64) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-
-    fn reset(&mut self) {}
-
-    fn save_state(&self, _out: &mut Vec<u8>) {}
-
-    fn load_state(&mut self, _values: &Values, bytes: &[u8]) -> Result<(), String> {
-        Reader::new(bytes).finish()
     }
 }
 

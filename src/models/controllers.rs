@@ -12,7 +12,7 @@ use crate::arm::{end_effector_position, gravity_torques, ArmParams};
 use crate::control::{computed_torque, paper_reference, task_space_acceleration, TaskReference, TaskSpaceGains};
 use crate::fmi2::codec::{Put, Reader};
 use crate::fmi2::description::{Causality, Kind, ModelDescription, TableBuilder, Variability};
-use crate::fmi2::model::{Model, Values};
+use crate::fmi2::model::{Model, StaticModel, Values};
 
 fn per_joint(b: &mut TableBuilder, n: usize, f: impl Fn(&mut TableBuilder, usize) -> u32) -> Vec<u32> {
     (0..n).map(|i| f(b, i)).collect()
@@ -317,6 +317,13 @@ impl IdealCompensatorModel {
         Ok(Self { description, arm, q, qd, friction, gravity, total, enable_friction, enable_gravity, angles: vec![0.0; n] })
     }
 
+}
+
+impl StaticModel for IdealCompensatorModel {
+    fn description(&self) -> &ModelDescription {
+        &self.description
+    }
+
     fn compute(&mut self, values: &mut Values) {
         let use_friction = values.booleans[self.enable_friction as usize];
         let use_gravity = values.booleans[self.enable_gravity as usize];
@@ -329,29 +336,6 @@ impl IdealCompensatorModel {
             values.reals[self.gravity[i] as usize] = gi;
             values.reals[self.total[i] as usize] = f + gi;
         }
-    }
-}
-
-impl Model for IdealCompensatorModel {
-    fn description(&self) -> &ModelDescription {
-        &self.description
-    }
-    fn initialize(&mut self, values: &mut Values, _start_time: f64) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-    fn update_outputs(&mut self, values: &mut Values) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-    fn do_step(&mut self, values: &mut Values, _time: f64, _step: f64) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-    fn reset(&mut self) {}
-    fn save_state(&self, _out: &mut Vec<u8>) {}
-    fn load_state(&mut self, _values: &Values, bytes: &[u8]) -> Result<(), String> {
-        Reader::new(bytes).finish()
     }
 }
 

@@ -3,7 +3,7 @@
 
 use crate::fmi2::codec::{Put, Reader};
 use crate::fmi2::description::{Causality, Kind, ModelDescription, TableBuilder, Variability};
-use crate::fmi2::model::{Model, Values};
+use crate::fmi2::model::{Model, StaticModel, Values};
 
 /// `y' = u`, `y(t0) = y0`: over a step of h with the input held, `y += h·u` exactly.
 /// No direct feedthrough: `y` does not depend on `u` at the same instant.
@@ -84,37 +84,15 @@ impl GainModel {
         Ok(Self { description, u, y, k })
     }
 
-    fn compute(&self, values: &mut Values) {
-        values.reals[self.y as usize] = values.reals[self.k as usize] * values.reals[self.u as usize];
-    }
 }
 
-impl Model for GainModel {
+impl StaticModel for GainModel {
     fn description(&self) -> &ModelDescription {
         &self.description
     }
 
-    fn initialize(&mut self, values: &mut Values, _start_time: f64) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-
-    fn update_outputs(&mut self, values: &mut Values) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-
-    fn do_step(&mut self, values: &mut Values, _time: f64, _step: f64) -> Result<(), String> {
-        self.compute(values);
-        Ok(())
-    }
-
-    fn reset(&mut self) {}
-
-    fn save_state(&self, _out: &mut Vec<u8>) {}
-
-    fn load_state(&mut self, _values: &Values, bytes: &[u8]) -> Result<(), String> {
-        Reader::new(bytes).finish()
+    fn compute(&mut self, values: &mut Values) {
+        values.reals[self.y as usize] = values.reals[self.k as usize] * values.reals[self.u as usize];
     }
 }
 
