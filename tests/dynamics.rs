@@ -7,8 +7,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn reference() -> serde_json::Value {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/dynamics-reference.json");
-    let text = std::fs::read_to_string(path).expect("shared/dynamics-reference.json beside the checkout");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dynamics-reference.json");
+    let text = std::fs::read_to_string(path).expect("tests/data/dynamics-reference.json");
     serde_json::from_str(&text).unwrap()
 }
 

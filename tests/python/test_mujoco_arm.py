@@ -34,12 +34,12 @@ def test_frictionless_trajectory_matches_mujoco(neurarm, tmp_path):
 
 def test_mujoco_model_is_the_arm_we_think():
     """Guards the comparison itself: MuJoCo's mass matrix equals Pinocchio's values in
-    shared/dynamics-reference.json at every reference state."""
+    tests/data/dynamics-reference.json at every reference state."""
     import json
     import pathlib
 
     import mujoco
-    reference = pathlib.Path(__file__).resolve().parents[3] / "shared" / "dynamics-reference.json"
+    reference = pathlib.Path(__file__).resolve().parents[1] / "data" / "dynamics-reference.json"
     cases = json.loads(reference.read_text())["cases"]
     model, data = mujoco_arm.make(False)
     for case in cases:
