@@ -2,8 +2,10 @@
 //! as MuJoCo's RK4 takes), with and without friction, and one 1 ms step with the default
 //! 0.25 ms internal step. `scripts/bench-arm` runs this and MuJoCo and prints the ratio.
 
+#![allow(missing_docs)] // criterion_group! makes an undocumented public function
+
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use neurarm::arm::*;
+use neurarm_physics::arm::*;
 
 fn bench_step(c: &mut Criterion, name: &str, params: ArmParams, internal_step_s: f64) {
     let mut sim = ArmSimulator::new(params, IntegratorSettings { internal_step_s }).unwrap();

@@ -8,17 +8,20 @@
 //! `benches/python/loop_ratio.py` has fmpy drive the same FMUs. `scripts/bench-loop` runs both
 //! and prints the ratios and real-time factors.
 
+#![allow(missing_docs)] // criterion_group! makes an undocumented public function
+
 use std::path::PathBuf;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nalgebra::{DMatrix, Vector2};
-use neurarm::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
-use neurarm::config::ArmConfig;
-use neurarm::control::{computed_torque, paper_reference, task_space_acceleration, TaskReference, TaskSpaceGains};
+use neurarm_physics::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
+use neurarm_physics::config::ArmConfig;
+use neurarm_physics::control::{computed_torque, paper_reference, task_space_acceleration, TaskReference, TaskSpaceGains};
 use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Settings, REFERENCE_CENTRE};
-use neurarm::master::System;
-use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
-use neurarm::nn::{train, Mlp, Signal, TrainSettings, WeightsFile};
+use fmi2_cosim::System;
+use neurarm::export::export_fmu;
+use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
+use neurarm_physics::nn::{train, Mlp, Signal, TrainSettings, WeightsFile};
 
 const STEP: f64 = 1e-3;
 
@@ -55,7 +58,7 @@ fn loop_step(c: &mut Criterion) {
         sources.push((format!("friction_{}.json", j + 1), path));
     }
     let comp = dir.join("NnFrictionCompensator.fmu");
-    let model = ModelSpec::NnCompensator { joints: 4, friction: sources.iter().map(|s| s.0.clone()).collect(), gravity: None, enable_friction: true, enable_gravity: false };
+    let model = ModelSpec::NnCompensator(NnCompensatorSpec { joints: 4, friction: sources.iter().map(|s| s.0.clone()).collect(), gravity: None, enable_friction: true, enable_gravity: false });
     export_fmu(&FmuSpec { identifier: "NnFrictionCompensator".into(), model }, &sources, &comp).expect("compensator FMU");
     let settings = Settings::quick();
     let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &settings).expect("system");

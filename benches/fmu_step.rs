@@ -3,13 +3,15 @@
 //! 4 torques, fmi2DoStep, fmi2GetReal of the 12 kinematic outputs). `scripts/bench-fmu` runs
 //! this and fmpy driving the same FMU, and prints the ratios.
 
+#![allow(missing_docs)] // criterion_group! makes an undocumented public function
+
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::PathBuf;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use neurarm::arm::{end_effector_state, ArmState};
-use neurarm::config::ArmConfig;
-use neurarm::models::{FmuSpec, SPEC_FILE};
+use neurarm_physics::arm::{end_effector_state, ArmState};
+use neurarm_physics::config::ArmConfig;
+use neurarm_models::{FmuSpec, SPEC_FILE};
 
 type C = *mut c_void;
 type Logger = unsafe extern "C" fn(*mut c_void, *const c_char, c_int, *const c_char, *const c_char);

@@ -8,9 +8,9 @@
 use std::time::Instant;
 
 use nalgebra::DMatrix;
-use neurarm::arm::{gravity_torques, ArmParams};
-use neurarm::nn::lm::split;
-use neurarm::nn::{train, MinMaxScaling, Mlp, TrainSettings};
+use neurarm_physics::arm::{gravity_torques, ArmParams};
+use neurarm_physics::nn::lm::split;
+use neurarm_physics::nn::{train, MinMaxScaling, Mlp, TrainSettings};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

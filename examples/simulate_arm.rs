@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use neurarm::arm::*;
+use neurarm_physics::arm::*;
 use neurarm::table::write_atomic;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

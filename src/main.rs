@@ -5,11 +5,12 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
-use neurarm::arm::ArmState;
-use neurarm::config::ArmConfig;
-use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
+use neurarm_physics::arm::ArmState;
+use neurarm_physics::config::ArmConfig;
+use neurarm::export::export_fmu;
+use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec};
 use neurarm::simulate::{simulate, TorqueInput};
-use neurarm::nn::{train, Signal, TrainSettings, WeightsFile};
+use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
 use neurarm::table::{write_atomic, write_text_atomic, NumericTable};
 use nalgebra::DMatrix;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -193,9 +194,9 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Simulate { system: Some(system), output, .. } => {
             let text = std::fs::read_to_string(&system).with_context(|| format!("reading {}", system.display()))?;
-            let spec = neurarm::master::SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
+            let spec = fmi2_cosim::SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
             let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-            let outcome = neurarm::master::run(&spec, base).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
+            let outcome = fmi2_cosim::run(&spec, base).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
             write_atomic(&output, &outcome.columns, outcome.rows.iter().cloned()).with_context(|| format!("writing {}", output.display()))?;
             match outcome.error {
                 None => eprintln!("wrote {} rows to {}", outcome.rows.len(), output.display()),
@@ -271,13 +272,13 @@ fn run(cli: Cli) -> Result<()> {
             }
             let spec = FmuSpec {
                 identifier,
-                model: ModelSpec::NnCompensator {
+                model: ModelSpec::NnCompensator(NnCompensatorSpec {
                     joints,
                     friction: (1..=friction.len()).map(|i| format!("friction_{i}.json")).collect(),
                     gravity: gravity.as_ref().map(|_| "gravity.json".to_owned()),
                     enable_friction: !friction.is_empty(),
                     enable_gravity: gravity.is_some(),
-                },
+                }),
             };
             export_fmu(&spec, &sources, &output).map_err(anyhow::Error::msg)?;
             eprintln!("wrote {} ({}, {joints} joints)", output.display(), spec.identifier);
@@ -288,7 +289,7 @@ fn run(cli: Cli) -> Result<()> {
             let identifier = identifier_for(name, &output, "PlanarArm");
             let spec = FmuSpec {
                 identifier,
-                model: ModelSpec::PlanarArm { config, q0: initial.q, qd0: initial.qd },
+                model: ModelSpec::PlanarArm(PlanarArmSpec { config, q0: initial.q, qd0: initial.qd }),
             };
             export_fmu(&spec, &[], &output).map_err(anyhow::Error::msg)?;
             eprintln!("wrote {} ({}, {n} joints)", output.display(), spec.identifier);

@@ -8,8 +8,8 @@
 
 use std::path::Path;
 
-use crate::arm::{end_effector_state, ArmState, StepError};
-use crate::config::ArmConfig;
+use neurarm_physics::arm::{end_effector_state, ArmState, StepError};
+use neurarm_physics::config::ArmConfig;
 use crate::table::{NumericTable, TableError};
 
 /// Name of joint `i`'s (0-based) column with prefix `prefix`, e.g. `tau_1`.
@@ -98,7 +98,7 @@ pub fn simulate(config: &ArmConfig, initial: &ArmState, input: &TorqueInput) -> 
 pub enum SimulateError {
     /// The configuration is invalid.
     #[error("invalid configuration: {0}")]
-    Config(crate::arm::ParamError),
+    Config(neurarm_physics::arm::ParamError),
     /// A step was refused.
     #[error("at t = {time} s: {source}")]
     Step {

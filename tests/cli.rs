@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
-use neurarm::arm::ArmState;
-use neurarm::config::ArmConfig;
+use neurarm_physics::arm::ArmState;
+use neurarm_physics::config::ArmConfig;
 use neurarm::simulate::{simulate, TorqueInput};
 use neurarm::table::NumericTable;
 
@@ -204,7 +204,7 @@ fn train_and_eval_round_trip_and_report_bad_data() {
     let net = dir.path().join("net.json");
     let o = neurarm().args(["train", "-d"]).arg(&data).args(["--inputs", "qd_1", "--targets", "tau_1", "--hidden", "6", "-o"]).arg(&net).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let weights = neurarm::nn::WeightsFile::read(&net).unwrap();
+    let weights = neurarm_physics::nn::WeightsFile::read(&net).unwrap();
     assert_eq!(weights.inputs[0].unit, "rad/s");
     assert_eq!(weights.outputs[0].unit, "N.m");
     // eval writes the library's forward pass.

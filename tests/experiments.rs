@@ -2,9 +2,9 @@
 //! period of tracking): it runs, writes its outputs, and its quality figures hold.
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
-use neurarm::arm::JointFriction;
+use neurarm_physics::arm::JointFriction;
 use neurarm::experiments::{paper::run_paper, Settings};
-use neurarm::master::SystemSpec;
+use fmi2_cosim::SystemSpec;
 
 #[test]
 fn the_quick_paper_run_reproduces_the_papers_findings() {
@@ -33,7 +33,7 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
         assert_eq!(SystemSpec::from_toml(&spec.to_toml().unwrap(), name).unwrap(), spec);
     }
     let spec = SystemSpec::from_toml(&std::fs::read_to_string(out.path().join("systems/joint_nn.toml")).unwrap(), "joint_nn").unwrap();
-    let rerun = neurarm::master::run(&spec, &out.path().join("systems")).unwrap();
+    let rerun = fmi2_cosim::run(&spec, &out.path().join("systems")).unwrap();
     assert!(rerun.error.is_none());
     let recorded = std::fs::read_to_string(out.path().join("data/joint_nn.csv")).unwrap();
     let first_after_start: Vec<f64> = recorded.lines().nth(2).unwrap().split(',').map(|x| x.parse().unwrap()).collect();

@@ -3,8 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use neurarm::master::{run, Algorithm, System, SystemSpec, Value};
-use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
+use fmi2_cosim::{run, Algorithm, System, SystemSpec, Value};
+use neurarm::export::export_fmu;
+use neurarm_models::{FmuSpec, GainSpec, IntegratorSpec, ModelSpec};
 
 fn fmu(dir: &Path, identifier: &str, model: ModelSpec) -> PathBuf {
     let path = dir.join(format!("{identifier}.fmu"));
@@ -20,8 +21,8 @@ struct Blocks {
 
 fn blocks() -> Blocks {
     let dir = tempfile::tempdir().unwrap();
-    let integrator = fmu(dir.path(), "Integrator", ModelSpec::Integrator { y0: 0.0 });
-    let gain = fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    let integrator = fmu(dir.path(), "Integrator", ModelSpec::Integrator(IntegratorSpec { y0: 0.0 }));
+    let gain = fmu(dir.path(), "Gain", ModelSpec::Gain(GainSpec { k: 1.0 }));
     Blocks { _dir: dir, integrator, gain }
 }
 

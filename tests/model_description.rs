@@ -4,9 +4,9 @@
 
 use std::path::Path;
 
-use neurarm::config::ArmConfig;
-use neurarm::fmi2::description::Causality;
-use neurarm::models::FmuSpec;
+use neurarm_physics::config::ArmConfig;
+use fmi2_export::description::Causality;
+use neurarm_models::FmuSpec;
 
 fn check(name: &str, spec: FmuSpec) {
     let xml = spec.description().unwrap().to_xml();
@@ -61,9 +61,9 @@ fn guid_changes_with_any_start_value() {
 }
 
 /// Fixed, formula-made weights (no training, so the file is the same on every machine).
-fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) -> neurarm::nn::WeightsFile {
+fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) -> neurarm_physics::nn::WeightsFile {
     use nalgebra::{DMatrix, DVector};
-    use neurarm::nn::{MinMaxScaling, Mlp, Signal, TrainReport, TrainSettings, WeightsFile};
+    use neurarm_physics::nn::{MinMaxScaling, Mlp, Signal, TrainReport, TrainSettings, WeightsFile};
     // Exact binary fractions: the same bits on every machine, whatever its libm.
     let f = |a: usize, b: usize, c: f64| ((a * 7 + b * 3) % 11) as f64 / 8.0 - 0.625 + c;
     let net = Mlp {
@@ -78,7 +78,7 @@ fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) 
     let report = TrainReport {
         epochs: 0,
         best_epoch: 0,
-        stop_reason: neurarm::nn::StopReason::Epochs,
+        stop_reason: neurarm_physics::nn::StopReason::Epochs,
         restart: 0,
         train_mse: 0.0,
         validation_mse: None,
@@ -90,7 +90,7 @@ fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) 
 
 #[test]
 fn nn_compensator_model_description_has_not_drifted() {
-    use neurarm::models::ModelSpec;
+    use neurarm_models::{ModelSpec, NnCompensatorSpec};
     let dir = tempfile::tempdir().unwrap();
     let mut friction = Vec::new();
     for j in 1..=4 {
@@ -101,7 +101,7 @@ fn nn_compensator_model_description_has_not_drifted() {
     std::fs::write(dir.path().join("gravity.json"), fixed_weights(4, 5, 4, ("q", "tau")).to_json()).unwrap();
     let spec = FmuSpec {
         identifier: "NnCompensator".into(),
-        model: ModelSpec::NnCompensator { joints: 4, friction, gravity: Some("gravity.json".into()), enable_friction: true, enable_gravity: true },
+        model: ModelSpec::NnCompensator(NnCompensatorSpec { joints: 4, friction, gravity: Some("gravity.json".into()), enable_friction: true, enable_gravity: true }),
     };
     let xml = spec.build_from(Some(dir.path())).unwrap().description().to_xml();
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription").join("NnCompensator.xml");

@@ -5,9 +5,10 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use neurarm::master::ssp::write_ssp;
-use neurarm::master::{ConnectionSpec, FmuEntry, SimulationSpec, SystemSpec, Value};
-use neurarm::models::{export_fmu, FmuSpec, ModelSpec};
+use fmi2_cosim::ssp::write_ssp;
+use fmi2_cosim::{ConnectionSpec, FmuEntry, SimulationSpec, SystemSpec, Value};
+use neurarm::export::export_fmu;
+use neurarm_models::{FmuSpec, GainSpec, IntegratorSpec, ModelSpec};
 
 fn fmu(dir: &Path, identifier: &str, model: ModelSpec) -> PathBuf {
     let path = dir.join(format!("{identifier}.fmu"));
@@ -48,8 +49,8 @@ fn names(archive: &mut zip::ZipArchive<std::fs::File>) -> Vec<String> {
 #[test]
 fn an_integrator_gain_loop_becomes_an_ssp() {
     let dir = tempfile::tempdir().unwrap();
-    fmu(dir.path(), "Integrator", ModelSpec::Integrator { y0: 0.0 });
-    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    fmu(dir.path(), "Integrator", ModelSpec::Integrator(IntegratorSpec { y0: 0.0 }));
+    fmu(dir.path(), "Gain", ModelSpec::Gain(GainSpec { k: 1.0 }));
     let out = dir.path().join("loop.ssp");
     write_ssp(&loop_spec("Integrator.fmu"), dir.path(), &out).unwrap();
 
@@ -105,8 +106,8 @@ fn an_integrator_gain_loop_becomes_an_ssp() {
 fn shared_fmus_are_copied_once_and_text_is_escaped() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("my blocks")).unwrap();
-    fmu(&dir.path().join("my blocks"), "Integrator", ModelSpec::Integrator { y0: 0.0 });
-    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    fmu(&dir.path().join("my blocks"), "Integrator", ModelSpec::Integrator(IntegratorSpec { y0: 0.0 }));
+    fmu(dir.path(), "Gain", ModelSpec::Gain(GainSpec { k: 1.0 }));
     let mut spec = loop_spec("my blocks/Integrator.fmu");
     spec.fmu.push(entry("a&b", "my blocks/Integrator.fmu", &[]));
     spec.connection.push(connection("int.y", "a&b.u"));
@@ -123,9 +124,9 @@ fn shared_fmus_are_copied_once_and_text_is_escaped() {
 #[test]
 fn a_missing_fmu_is_named_and_nothing_is_written() {
     let dir = tempfile::tempdir().unwrap();
-    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    fmu(dir.path(), "Gain", ModelSpec::Gain(GainSpec { k: 1.0 }));
     let out = dir.path().join("loop.ssp");
-    let e = write_ssp(&loop_spec("NoSuch.fmu"), dir.path(), &out).unwrap_err();
+    let e = write_ssp(&loop_spec("NoSuch.fmu"), dir.path(), &out).unwrap_err().to_string();
     assert!(e.contains("NoSuch.fmu") && e.contains("'int'"), "{e}");
     assert!(!out.exists());
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
@@ -140,11 +141,11 @@ fn a_missing_fmu_is_named_and_nothing_is_written() {
 #[test]
 fn bad_systems_are_refused_by_unit_and_variable() {
     let dir = tempfile::tempdir().unwrap();
-    fmu(dir.path(), "Integrator", ModelSpec::Integrator { y0: 0.0 });
-    fmu(dir.path(), "Gain", ModelSpec::Gain { k: 1.0 });
+    fmu(dir.path(), "Integrator", ModelSpec::Integrator(IntegratorSpec { y0: 0.0 }));
+    fmu(dir.path(), "Gain", ModelSpec::Gain(GainSpec { k: 1.0 }));
     let out = dir.path().join("bad.ssp");
     let check = |spec: SystemSpec, expected: &[&str]| {
-        let e = write_ssp(&spec, dir.path(), &out).unwrap_err();
+        let e = write_ssp(&spec, dir.path(), &out).unwrap_err().to_string();
         for x in expected {
             assert!(e.contains(x), "'{x}' not in: {e}");
         }

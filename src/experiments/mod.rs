@@ -12,12 +12,13 @@ use std::sync::Mutex;
 
 use nalgebra::{DMatrix, Vector2};
 
-use crate::arm::{inverse_dynamics_rnea, jacobian, mass_matrix, ArmParams, FrictionBranch, JointFriction};
-use crate::config::ArmConfig;
-use crate::control::{inverse_kinematics, paper_reference, pseudo_inverse, TaskSpaceGains};
-use crate::master::{Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, SimulationSpec, Simulation, System, SystemSpec, Value};
-use crate::models::{export_fmu, FmuSpec, ModelSpec};
-use crate::nn::{train, Signal, TrainSettings, WeightsFile};
+use neurarm_physics::arm::{inverse_dynamics_rnea, jacobian, mass_matrix, ArmParams, FrictionBranch, JointFriction};
+use neurarm_physics::config::ArmConfig;
+use neurarm_physics::control::{inverse_kinematics, paper_reference, pseudo_inverse, TaskSpaceGains};
+use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, SimulationSpec, Simulation, System, SystemSpec, Value};
+use crate::export::export_fmu;
+use neurarm_models::{FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec};
+use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
 
 /// Centre of the task-space reference [m]: the curve spans x ∈ c_x ± 0.35, y ∈ c_y − 0.30 …
 /// c_y + 0.17, so with c = (0.45, 0.10) it stays between 0.1 m and 0.85 m from the base of
@@ -143,17 +144,17 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
     };
     let (centre, (q_start, _)) = tracking_start(&nominal.arm)?;
     Ok(Fmus {
-        arm: export("PlanarArm", ModelSpec::PlanarArm { config: nominal.clone(), q0: vec![0.0; 4], qd0: vec![0.0; 4] })?,
-        arm_real: export("PlanarArmReal", ModelSpec::PlanarArm { config: emulated_real_arm(), q0: vec![0.0; 4], qd0: vec![0.0; 4] })?,
+        arm: export("PlanarArm", ModelSpec::PlanarArm(PlanarArmSpec { config: nominal.clone(), q0: vec![0.0; 4], qd0: vec![0.0; 4] }))?,
+        arm_real: export("PlanarArmReal", ModelSpec::PlanarArm(PlanarArmSpec { config: emulated_real_arm(), q0: vec![0.0; 4], qd0: vec![0.0; 4] }))?,
         task_controller: export(
             "TaskSpaceController",
-            ModelSpec::TaskSpaceController { model: nominal.arm.clone().frictionless(), gains: TaskSpaceGains::default(), centre, q_start },
+            ModelSpec::TaskSpaceController(TaskSpaceControllerSpec { model: nominal.arm.clone().frictionless(), gains: TaskSpaceGains::default(), centre, q_start }),
         )?,
-        joint_controller: export("JointController", ModelSpec::JointController { joints: 4, kp: 50.0, kd: 0.0, use_sequence: true })?,
-        ideal_friction: export("IdealFrictionCompensator", ModelSpec::IdealCompensator { arm: nominal.arm.clone(), enable_friction: true, enable_gravity: false })?,
+        joint_controller: export("JointController", ModelSpec::JointController(JointControllerSpec { joints: 4, kp: 50.0, kd: 0.0, use_sequence: true }))?,
+        ideal_friction: export("IdealFrictionCompensator", ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: nominal.arm.clone(), enable_friction: true, enable_gravity: false }))?,
         ideal_gravity: export(
             "IdealGravityCompensator",
-            ModelSpec::IdealCompensator { arm: nominal.arm.clone().with_base_angle(PI / 2.0), enable_friction: false, enable_gravity: true },
+            ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: nominal.arm.clone().with_base_angle(PI / 2.0), enable_friction: false, enable_gravity: true }),
         )?,
     })
 }
@@ -374,14 +375,14 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
     // validation part, the one that fits all pairs best is kept: scoring on the validation
     // part alone picks nets whose jump is anywhere, as it rarely holds a pair near q̇ = 0.
     const STARTS: u64 = 10;
-    let mut best: Option<(f64, TrainSettings, crate::nn::Trained)> = None;
+    let mut best: Option<(f64, TrainSettings, neurarm_physics::nn::Trained)> = None;
     for start in 0..STARTS {
         let mut settings = TrainSettings { hidden: 10, restarts: 1, max_fail: 20, seed: seed + joint as u64 + 7919 * start, ..TrainSettings::default() };
         // The pair at rest is the only one in the stick band: keep it in the training part
         // (the first split seed from there that does), or the jump lands anywhere in the band.
         if let Some(rest) = pairs.iter().position(|p| p.0 == 0.0) {
             for _ in 0..1000 {
-                if crate::nn::lm::split(pairs.len(), settings.split, settings.seed)[0].contains(&rest) {
+                if neurarm_physics::nn::lm::split(pairs.len(), settings.split, settings.seed)[0].contains(&rest) {
                     break;
                 }
                 settings.seed += 1000;
@@ -635,7 +636,7 @@ pub fn gravity_compensation_system(arm: &Path, controller: &Path, compensator: O
     let mut record: Vec<String> = (1..=n).map(|i| format!("ctl.q_target_{i}")).collect();
     record.extend((1..=n).map(|i| format!("arm.q_{i}")));
     record.extend((1..=n).map(|i| format!("ctl.tau_{i}")));
-    spec.simulation.stop = crate::models::controllers::SEQUENCE_SEGMENT_S * crate::models::controllers::JOINT_SEQUENCE.len() as f64;
+    spec.simulation.stop = neurarm_models::joint::SEQUENCE_SEGMENT_S * neurarm_models::joint::JOINT_SEQUENCE.len() as f64;
     spec.simulation.step = settings.step;
     spec.simulation.record = record;
     spec
@@ -674,7 +675,7 @@ pub fn joint_rms_errors(run: &LoopRun, joints: usize) -> Vec<f64> {
 /// error the loop settles to, which gravity left uncompensated dominates.
 pub fn joint_settled_errors(run: &LoopRun, joints: usize) -> Vec<f64> {
     let time = run.column("time").unwrap_or_default();
-    let segment = crate::models::controllers::SEQUENCE_SEGMENT_S;
+    let segment = neurarm_models::joint::SEQUENCE_SEGMENT_S;
     let settled: Vec<bool> = time.iter().map(|t| t.rem_euclid(segment) >= segment - 0.5 || (*t > 0.0 && t.rem_euclid(segment) == 0.0)).collect();
     (1..=joints)
         .map(|i| {

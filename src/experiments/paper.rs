@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rand::{Rng, SeedableRng};
 
 use super::*;
-use crate::arm::gravity_torques;
+use neurarm_physics::arm::gravity_torques;
 use crate::table::{write_atomic, write_text_atomic};
 
 /// The paper's Table 1 [m²]: sim perfect, sim NN, sim none, real NN, real none.
@@ -180,13 +180,13 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
         if gravity {
             sources.push(("gravity.json".into(), gravity_path.clone()));
         }
-        let model = ModelSpec::NnCompensator {
+        let model = ModelSpec::NnCompensator(NnCompensatorSpec {
             joints: 4,
             friction: friction.iter().map(|(n, _)| n.clone()).collect(),
             gravity: gravity.then(|| "gravity.json".to_owned()),
             enable_friction: !friction.is_empty(),
             enable_gravity: gravity,
-        };
+        });
         export_fmu(&FmuSpec { identifier: identifier.into(), model }, &sources, &path)?;
         Ok(path)
     };
@@ -218,7 +218,7 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
         let toml = systems_dir.join(format!("{name}.toml"));
         let text = format!("# The {name} loop of `neurarm paper`; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}", spec.to_toml()?);
         write_text_atomic(&toml, &text).map_err(io(&toml))?;
-        crate::master::ssp::write_ssp(spec, &systems_dir, &out.join(format!("{name}.ssp")))?;
+        fmi2_cosim::ssp::write_ssp(spec, &systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
     }
     let b = bar(loops.len() as u64, "closed loops");
     let loop_runs = parallel(loops.clone(), settings.threads, |(_, spec)| run_loop(&spec, &systems_dir), || b.inc(1))?;

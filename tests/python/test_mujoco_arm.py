@@ -39,7 +39,7 @@ def test_mujoco_model_is_the_arm_we_think():
     import pathlib
 
     import mujoco
-    reference = pathlib.Path(__file__).resolve().parents[1] / "data" / "dynamics-reference.json"
+    reference = pathlib.Path(__file__).resolve().parents[2] / "crates" / "physics" / "tests" / "data" / "dynamics-reference.json"
     cases = json.loads(reference.read_text())["cases"]
     model, data = mujoco_arm.make(False)
     for case in cases:

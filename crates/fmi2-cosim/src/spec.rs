@@ -1,0 +1,146 @@
+//! The system file (TOML): FMUs, connections and how to simulate them, and the values a
+//! system sets.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// How units are stepped within one communication step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Algorithm {
+    /// One after another, each passing its new outputs on before the next steps.
+    #[default]
+    GaussSeidel,
+    /// All from the same inputs, then all outputs passed on.
+    Jacobi,
+}
+
+impl Algorithm {
+    /// The name the system file uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::GaussSeidel => "gauss-seidel",
+            Algorithm::Jacobi => "jacobi",
+        }
+    }
+}
+
+/// A value to set: the base type follows the variable, with integers accepted for reals.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Value {
+    /// A Boolean.
+    Boolean(bool),
+    /// An integer (also accepted by Real variables).
+    Integer(i64),
+    /// A real.
+    Real(f64),
+    /// A string.
+    String(String),
+}
+
+/// A system: FMUs, connections, and how to simulate it.
+///
+/// ```toml
+/// [[fmu]]
+/// name = "arm"
+/// path = "PlanarArm.fmu"          # relative to the system file
+/// parameters = { q0_1 = 0.3 }
+///
+/// [[connection]]
+/// from = "arm.q_*"                # '*' matches the same text on both sides
+/// to = "controller.q_*"
+///
+/// [simulation]
+/// stop = 10.0
+/// step = 0.001
+/// record = ["arm.x", "arm.y"]
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SystemSpec {
+    /// The units, in declaration order.
+    pub fmu: Vec<FmuEntry>,
+    /// Output → input connections.
+    #[serde(default)]
+    pub connection: Vec<ConnectionSpec>,
+    /// Time span, step, algorithm, recording.
+    pub simulation: SimulationSpec,
+}
+
+/// One FMU of a system.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FmuEntry {
+    /// Unit name (instance name), used in connections as `name.variable`.
+    pub name: String,
+    /// Path of the `.fmu`, relative to the system file.
+    pub path: String,
+    /// Parameters (and unconnected inputs) to set before initialisation.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, Value>,
+}
+
+/// A connection from an output to an input.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConnectionSpec {
+    /// "unit.output".
+    pub from: String,
+    /// "unit.input".
+    pub to: String,
+}
+
+/// How to simulate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// Start time [s].
+    #[serde(default)]
+    pub start: f64,
+    /// Stop time [s].
+    pub stop: f64,
+    /// Communication step [s].
+    pub step: f64,
+    /// Stepping algorithm.
+    #[serde(default)]
+    pub algorithm: Algorithm,
+    /// Variables to record ("unit.variable").
+    #[serde(default)]
+    pub record: Vec<String>,
+    /// Record every k-th communication point.
+    #[serde(default = "one")]
+    pub record_every: u64,
+}
+
+fn one() -> u64 {
+    1
+}
+
+impl SimulationSpec {
+    /// Checks the time span and step: finite, a positive step, stop ≥ start.
+    pub fn check(&self) -> Result<(), String> {
+        let valid = self.step > 0.0 && self.step.is_finite() && self.start.is_finite() && self.stop.is_finite() && self.stop >= self.start;
+        if valid {
+            Ok(())
+        } else {
+            Err(format!("[simulation] needs a positive step and stop ≥ start (got start {}, stop {}, step {})", self.start, self.stop, self.step))
+        }
+    }
+}
+
+impl SystemSpec {
+    /// Parses a system file's text; `origin` names it in messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, String> {
+        let spec: Self = toml::from_str(text).map_err(|e| format!("{origin}: {}", e.to_string().trim_end()))?;
+        spec.simulation.check().map_err(|e| format!("{origin}: {e}"))?;
+        Ok(spec)
+    }
+
+    /// The system file's text; [`SystemSpec::from_toml`] reads it back unchanged (reals
+    /// are written in their shortest exact form).
+    pub fn to_toml(&self) -> Result<String, String> {
+        toml::to_string(self).map_err(|e| format!("writing the system file: {e}"))
+    }
+}

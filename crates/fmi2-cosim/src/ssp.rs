@@ -1,0 +1,314 @@
+//! A system written as an SSP 1.0 archive (System Structure and Parameterization, Modelica
+//! Association Project): a zip holding `SystemStructure.ssd` and every FMU under `resources/`.
+//!
+//! # What the SSD holds
+//! - One `ssd:System` named after the archive, whose `ssd:Elements` are one `ssd:Component`
+//!   per unit, in declaration order (`source="resources/<file>.fmu"`,
+//!   `implementation="CoSimulation"`). Two units loaded from the same file share one copy.
+//! - Per component, `ssd:Connectors` in `modelDescription.xml` order, each with its type
+//!   (`ssc:Real`, `ssc:Integer`, `ssc:Boolean`, ...): every Real, Integer and Boolean output
+//!   (kind `output`), every *connected* input (kind `input`) and every parameter the spec sets
+//!   (kind `parameter`). An input that is not connected gets no connector, even when the spec
+//!   sets it: SSP only requires connectors for what connections use, and importers such as
+//!   fmpy expect every input connector to be connected (and would overwrite its value).
+//! - `ssd:Connections`, one per output → input pair, `*` patterns expanded by
+//!   [`System::connect`].
+//! - The spec's parameters (and values of unconnected inputs) as one system-level
+//!   `ssd:ParameterBinding` with an inline `ssv:ParameterSet`, under hierarchical names
+//!   (`unit.variable`), so the set applies to the whole system as it stands.
+//! - `ssd:DefaultExperiment` with the start and stop time. SSP 1.0 has no place for the
+//!   communication step, the stepping algorithm or the recorded variables, so these go into
+//!   an `ssc:Annotation` of type [`ANNOTATION_TYPE`] there:
+//!   `<nr:Simulation stepSize="…" algorithm="gauss-seidel|jacobi" recordEvery="…">` with one
+//!   `<nr:Record variable="unit.variable"/>` per recorded variable.
+
+use std::collections::{BTreeSet, HashMap};
+use std::io::{Cursor, Write};
+use std::path::{Path, PathBuf};
+
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
+use quick_xml::Writer;
+
+use crate::error::MasterError;
+use crate::interface::{BaseType, Causality};
+use crate::spec::{SimulationSpec, SystemSpec, Value};
+use crate::system::System;
+
+const NS_SSD: &str = "http://ssp-standard.org/SSP1/SystemStructureDescription";
+const NS_SSC: &str = "http://ssp-standard.org/SSP1/SystemStructureCommon";
+const NS_SSV: &str = "http://ssp-standard.org/SSP1/SystemStructureParameterValues";
+
+/// Namespace of the elements inside the simulation annotation.
+pub const ANNOTATION_NAMESPACE: &str = "urn:fmi2-cosim:ssp:simulation";
+
+/// `type` of the `ssc:Annotation` in `ssd:DefaultExperiment` that holds the communication
+/// step, the algorithm and the recorded variables.
+pub const ANNOTATION_TYPE: &str = "fmi2-cosim.simulation";
+
+/// Writes `out` as an SSP 1.0 archive (.ssp, a zip) of the system a spec describes:
+/// SystemStructure.ssd plus every FMU under resources/.
+///
+/// `base` is the folder the spec's relative FMU paths are taken from. The FMUs are not
+/// loaded, only their `modelDescription.xml` read, and the system is checked as
+/// [`System::from_spec`] checks it. See [`write_system`].
+pub fn write_ssp(spec: &SystemSpec, base: &Path, out: &Path) -> Result<(), MasterError> {
+    write_system(&System::from_spec(spec, base)?, &spec.simulation, out)
+}
+
+/// Writes `out` as an SSP 1.0 archive of `system`, simulated as `simulation` says. The
+/// archive is written to a temporary file beside `out` and renamed over it when complete, so
+/// on any error nothing is left at `out` (and an existing `out` is untouched).
+pub fn write_system(system: &System, simulation: &SimulationSpec, out: &Path) -> Result<(), MasterError> {
+    simulation.check().map_err(MasterError::new)?;
+    system.recordable(&simulation.record)?;
+    let system_name = out.file_stem().and_then(|s| s.to_str()).filter(|s| !s.is_empty()).unwrap_or("system").to_owned();
+    let sources = sources(system)?;
+    let ssd = ssd_xml(system, simulation, &sources, &system_name);
+    let mut resources: Vec<(PathBuf, String)> = Vec::new();
+    for (u, source) in system.units().iter().zip(&sources) {
+        if !resources.iter().any(|(_, s)| s == source) {
+            resources.push((u.path.clone(), source.clone()));
+        }
+    }
+    write_archive(out, &ssd, &resources).map_err(MasterError::new)
+}
+
+/// The path in the archive of each unit's FMU, `resources/<file>.fmu`; units loaded from the
+/// same file share one.
+fn sources(system: &System) -> Result<Vec<String>, MasterError> {
+    let mut by_file: HashMap<PathBuf, String> = HashMap::new();
+    let mut sources: Vec<String> = Vec::new();
+    for u in system.units() {
+        let canonical = std::fs::canonicalize(&u.path).map_err(|e| MasterError::new(format!("{}: {e}", u.path.display())).unit(&u.name))?;
+        let source = match by_file.get(&canonical) {
+            Some(s) => s.clone(),
+            None => {
+                let s = resource_name(&u.path, |candidate| sources.iter().any(|r| r == candidate));
+                by_file.insert(canonical, s.clone());
+                s
+            }
+        };
+        sources.push(source);
+    }
+    Ok(sources)
+}
+
+/// `resources/<name>.fmu` for `path`: its file stem with anything but letters, digits, '.',
+/// '-' and '_' replaced by '_' (so the name is a plain relative URI), made unique with a
+/// counter if `taken`.
+fn resource_name(path: &Path, taken: impl Fn(&str) -> bool) -> String {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut clean: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_') { c } else { '_' }).collect();
+    if clean.is_empty() || clean.starts_with('.') {
+        clean.insert(0, '_');
+    }
+    let mut candidate = format!("resources/{clean}.fmu");
+    let mut n = 2;
+    while taken(&candidate) {
+        candidate = format!("resources/{clean}-{n}.fmu");
+        n += 1;
+    }
+    candidate
+}
+
+/// An xs:double: the shortest text that reads back as the same number.
+fn xs_double(x: f64) -> String {
+    if x.is_nan() {
+        "NaN".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "INF" } else { "-INF" }.into()
+    } else {
+        format!("{x:?}")
+    }
+}
+
+/// The text of `SystemStructure.ssd`.
+fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], system_name: &str) -> String {
+    let ok = "writing XML to memory cannot fail";
+    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+    let start = |w: &mut Writer<Cursor<Vec<u8>>>, e: BytesStart| w.write_event(Event::Start(e)).expect(ok);
+    let end = |w: &mut Writer<Cursor<Vec<u8>>>, name: &str| w.write_event(Event::End(BytesEnd::new(name))).expect(ok);
+    let empty = |w: &mut Writer<Cursor<Vec<u8>>>, e: BytesStart| w.write_event(Event::Empty(e)).expect(ok);
+
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).expect(ok);
+    let tool = concat!("fmi2-cosim ", env!("CARGO_PKG_VERSION"));
+    start(
+        &mut w,
+        BytesStart::new("ssd:SystemStructureDescription").with_attributes([
+            ("xmlns:ssd", NS_SSD),
+            ("xmlns:ssc", NS_SSC),
+            ("xmlns:ssv", NS_SSV),
+            ("version", "1.0"),
+            ("name", system_name),
+            ("generationTool", tool),
+        ]),
+    );
+    start(&mut w, BytesStart::new("ssd:System").with_attributes([("name", system_name)]));
+
+    if !system.settings().is_empty() {
+        start(&mut w, BytesStart::new("ssd:ParameterBindings"));
+        start(&mut w, BytesStart::new("ssd:ParameterBinding"));
+        start(&mut w, BytesStart::new("ssd:ParameterValues"));
+        start(&mut w, BytesStart::new("ssv:ParameterSet").with_attributes([("version", "1.0"), ("name", "parameters")]));
+        start(&mut w, BytesStart::new("ssv:Parameters"));
+        for setting in system.settings() {
+            let unit = &system.units()[setting.unit];
+            let base = unit.interface.get(&setting.variable).map_or(BaseType::Real, |v| v.base);
+            let name = format!("{}.{}", unit.name, setting.variable);
+            start(&mut w, BytesStart::new("ssv:Parameter").with_attributes([("name", name.as_str())]));
+            let text = match &setting.value {
+                Value::Real(x) => xs_double(*x),
+                Value::Integer(i) if base == BaseType::Real => xs_double(*i as f64),
+                Value::Integer(i) => i.to_string(),
+                Value::Boolean(b) => b.to_string(),
+                Value::String(s) => s.clone(),
+            };
+            empty(&mut w, BytesStart::new(format!("ssv:{}", base.name())).with_attributes([("value", text.as_str())]));
+            end(&mut w, "ssv:Parameter");
+        }
+        end(&mut w, "ssv:Parameters");
+        end(&mut w, "ssv:ParameterSet");
+        end(&mut w, "ssd:ParameterValues");
+        end(&mut w, "ssd:ParameterBinding");
+        end(&mut w, "ssd:ParameterBindings");
+    }
+
+    start(&mut w, BytesStart::new("ssd:Elements"));
+    for (index, (c, source)) in system.units().iter().zip(sources).enumerate() {
+        start(
+            &mut w,
+            BytesStart::new("ssd:Component").with_attributes([
+                ("name", c.name.as_str()),
+                ("type", "application/x-fmu-sharedlibrary"),
+                ("source", source.as_str()),
+                ("implementation", "CoSimulation"),
+            ]),
+        );
+        let set: BTreeSet<&str> = system.settings().iter().filter(|s| s.unit == index).map(|s| s.variable.as_str()).collect();
+        let connected = |name: &str| system.links().iter().any(|l| l.to_unit == index && l.to_variable == name);
+        let connectors: Vec<(&str, &str, BaseType)> = c
+            .interface
+            .variables
+            .iter()
+            .filter_map(|v| {
+                let kind = match v.causality {
+                    Causality::Output if v.base.is_connectable() => "output",
+                    Causality::Input if connected(&v.name) => "input",
+                    Causality::Parameter if set.contains(v.name.as_str()) => "parameter",
+                    _ => return None,
+                };
+                Some((v.name.as_str(), kind, v.base))
+            })
+            .collect();
+        if !connectors.is_empty() {
+            start(&mut w, BytesStart::new("ssd:Connectors"));
+            for (name, kind, base) in connectors {
+                start(&mut w, BytesStart::new("ssd:Connector").with_attributes([("name", name), ("kind", kind)]));
+                // An ssc:Enumeration needs a declared enumeration type; it is left untyped.
+                if base != BaseType::Enumeration {
+                    empty(&mut w, BytesStart::new(format!("ssc:{}", base.name())));
+                }
+                end(&mut w, "ssd:Connector");
+            }
+            end(&mut w, "ssd:Connectors");
+        }
+        end(&mut w, "ssd:Component");
+    }
+    end(&mut w, "ssd:Elements");
+
+    if !system.links().is_empty() {
+        start(&mut w, BytesStart::new("ssd:Connections"));
+        for l in system.links() {
+            empty(
+                &mut w,
+                BytesStart::new("ssd:Connection").with_attributes([
+                    ("startElement", system.units()[l.from_unit].name.as_str()),
+                    ("startConnector", l.from_variable.as_str()),
+                    ("endElement", system.units()[l.to_unit].name.as_str()),
+                    ("endConnector", l.to_variable.as_str()),
+                ]),
+            );
+        }
+        end(&mut w, "ssd:Connections");
+    }
+    end(&mut w, "ssd:System");
+
+    let s = simulation;
+    let (t0, t1, h, every) = (xs_double(s.start), xs_double(s.stop), xs_double(s.step), s.record_every.max(1).to_string());
+    start(&mut w, BytesStart::new("ssd:DefaultExperiment").with_attributes([("startTime", t0.as_str()), ("stopTime", t1.as_str())]));
+    start(&mut w, BytesStart::new("ssd:Annotations"));
+    start(&mut w, BytesStart::new("ssc:Annotation").with_attributes([("type", ANNOTATION_TYPE)]));
+    let algorithm = s.algorithm.name();
+    let simulation = BytesStart::new("nr:Simulation").with_attributes([
+        ("xmlns:nr", ANNOTATION_NAMESPACE),
+        ("stepSize", h.as_str()),
+        ("algorithm", algorithm),
+        ("recordEvery", every.as_str()),
+    ]);
+    if s.record.is_empty() {
+        empty(&mut w, simulation);
+    } else {
+        start(&mut w, simulation);
+        for r in &s.record {
+            empty(&mut w, BytesStart::new("nr:Record").with_attributes([("variable", r.as_str())]));
+        }
+        end(&mut w, "nr:Simulation");
+    }
+    end(&mut w, "ssc:Annotation");
+    end(&mut w, "ssd:Annotations");
+    end(&mut w, "ssd:DefaultExperiment");
+    end(&mut w, "ssd:SystemStructureDescription");
+
+    let mut text = String::from_utf8(w.into_inner().into_inner()).expect("the XML is built from UTF-8 text");
+    text.push('\n');
+    text
+}
+
+/// Writes the zip to a temporary file beside `out`, then renames it over `out`.
+fn write_archive(out: &Path, ssd: &str, resources: &[(PathBuf, String)]) -> Result<(), String> {
+    let fail = |e: &dyn std::fmt::Display| format!("writing {}: {e}", out.display());
+    let dir = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    // Readable by all (0644 less the umask), as a plain file would be, not a temporary 0600.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    let tmp = builder.prefix(".fmi2-cosim-").suffix(".ssp.tmp").tempfile_in(dir).map_err(|e| fail(&e))?;
+    let mut zip = zip::ZipWriter::new(tmp.reopen().map_err(|e| fail(&e))?);
+    let deflated = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    // An FMU is a zip already: stored as it is.
+    let stored = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored).large_file(true);
+    zip.start_file("SystemStructure.ssd", deflated).map_err(|e| fail(&e))?;
+    zip.write_all(ssd.as_bytes()).map_err(|e| fail(&e))?;
+    for (path, name) in resources {
+        let mut file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        zip.start_file(name.as_str(), stored).map_err(|e| fail(&e))?;
+        std::io::copy(&mut file, &mut zip).map_err(|e| format!("copying {} into {}: {e}", path.display(), out.display()))?;
+    }
+    zip.finish().map_err(|e| fail(&e))?.sync_all().map_err(|e| fail(&e))?;
+    tmp.persist(out).map_err(|e| fail(&e.error))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn doubles_read_back_exactly() {
+        for x in [1.5, -2.0, 0.01, 1e307, 1e-300, 0.1 + 0.2] {
+            assert_eq!(xs_double(x).parse::<f64>().unwrap(), x);
+        }
+        assert_eq!(xs_double(f64::INFINITY), "INF");
+        assert_eq!(xs_double(f64::NEG_INFINITY), "-INF");
+    }
+
+    #[test]
+    fn resource_names_are_plain_and_unique() {
+        let taken = ["resources/My_Arm.fmu".to_owned()];
+        assert_eq!(resource_name(Path::new("/x/My Arm.fmu"), |c| taken.contains(&c.to_owned())), "resources/My_Arm-2.fmu");
+        assert_eq!(resource_name(Path::new("Gain.fmu"), |_| false), "resources/Gain.fmu");
+    }
+}

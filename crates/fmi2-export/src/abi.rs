@@ -1,0 +1,806 @@
+//! The FMI 2.0 C ABI over [`Instance`]: pointer checks, string conversion, and a
+//! `catch_unwind` around every entry point so no panic crosses into the host. The
+//! [`export_fmi2!`](crate::export_fmi2) macro emits the `extern "C"` symbols and calls these.
+//!
+//! The functions are public for that macro (and for tests that drive an instance through the
+//! C ABI without a shared library); a model author calls none of them.
+
+use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::PathBuf;
+
+use crate::instance::{Function, Instance, LogSink, Phase, Snapshot, Status};
+use crate::model::ModelFactory;
+
+/// `fmi2Component`.
+pub type Component = *mut c_void;
+/// `fmi2FMUstate`.
+pub type FmuState = *mut c_void;
+/// `fmi2CallbackLogger`: printf-style and variadic.
+pub type Logger = unsafe extern "C" fn(*mut c_void, *const c_char, c_int, *const c_char, *const c_char, ...);
+
+/// `fmi2CallbackFunctions`.
+#[repr(C)]
+pub struct CallbackFunctions {
+    /// Logger; required.
+    pub logger: Option<Logger>,
+    /// Allocator (unused: the FMU declares `canNotUseMemoryManagementFunctions`).
+    pub allocate_memory: Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>,
+    /// Deallocator (unused).
+    pub free_memory: Option<unsafe extern "C" fn(*mut c_void)>,
+    /// Asynchronous step callback (unused).
+    pub step_finished: Option<unsafe extern "C" fn(*mut c_void, c_int)>,
+    /// Passed back to the logger.
+    pub component_environment: *mut c_void,
+}
+
+/// `fmi2OK` etc. as the C ABI returns them.
+pub type RawStatus = c_int;
+/// `fmi2CoSimulation`.
+pub const FMI2_COSIMULATION: c_int = 1;
+/// `fmi2DoStepStatus`, `fmi2PendingStatus`, `fmi2LastSuccessfulTime`, `fmi2Terminated`.
+pub const STATUS_KINDS: [&str; 4] = ["fmi2DoStepStatus", "fmi2PendingStatus", "fmi2LastSuccessfulTime", "fmi2Terminated"];
+
+/// The host's logger and environment, callable from the instance.
+struct HostLogger {
+    logger: Logger,
+    environment: *mut c_void,
+    name: CString,
+}
+
+// SAFETY: the FMI standard lets an instance be used from any thread, one call at a time; the
+// logger and its environment belong to the host, which must accept calls from that thread.
+unsafe impl Send for HostLogger {}
+
+impl HostLogger {
+    fn log(&self, status: Status, category: &str, message: &str) {
+        // The message is passed as the format string: escape '%' and drop NULs.
+        let text = CString::new(message.replace('%', "%%").replace('\0', "")).expect("NULs removed");
+        let category = CString::new(category.replace('\0', "")).expect("NULs removed");
+        // SAFETY: the logger was given by the host for this purpose; all strings are valid C
+        // strings that outlive the call, and no variadic arguments are used by the format.
+        unsafe { (self.logger)(self.environment, self.name.as_ptr(), status as c_int, category.as_ptr(), text.as_ptr()) }
+    }
+}
+
+/// What an `fmi2Component` points to.
+pub struct Wrapper {
+    instance: Instance,
+    /// Keeps the strings returned by `fmi2GetString` alive until the next call.
+    strings: Vec<CString>,
+}
+
+/// SAFETY (for all functions below): the host passes pointers as the FMI 2.0 standard
+/// describes them; arrays have the lengths given with them.
+unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
+    if p.is_null() {
+        None
+    } else {
+        unsafe { CStr::from_ptr(p) }.to_str().ok()
+    }
+}
+
+unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        Some(&[])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(unsafe { std::slice::from_raw_parts(p, n) })
+    }
+}
+
+unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        Some(&mut [])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
+    }
+}
+
+/// Runs `body` on the instance behind `c`, turning a panic into `fmi2Fatal`.
+unsafe fn with(c: Component, name: &str, body: impl FnOnce(&mut Wrapper) -> Status) -> RawStatus {
+    if c.is_null() {
+        return Status::Error as c_int;
+    }
+    // SAFETY: a non-null component is one we returned from fmi2Instantiate (standard).
+    let wrapper = unsafe { &mut *(c as *mut Wrapper) };
+    if wrapper.instance.phase() == Phase::Fatal {
+        return Status::Fatal as c_int;
+    }
+    wrapper.instance.trace(|| name.to_string());
+    match catch_unwind(AssertUnwindSafe(|| body(&mut *wrapper))) {
+        Ok(s) => s as c_int,
+        Err(panic) => {
+            let why = panic_message(&*panic);
+            wrapper.instance.error(&format!("{name}: internal error ({why}); the instance can only be freed"));
+            wrapper.instance.set_fatal();
+            Status::Fatal as c_int
+        }
+    }
+}
+
+/// Turns a resource location URI (`file:///…` or `file:/…`, percent-encoded) into a folder.
+pub fn resource_folder(uri: &str) -> Result<PathBuf, String> {
+    let path = if let Some(rest) = uri.strip_prefix("file://") {
+        let rest = rest.strip_prefix("localhost").unwrap_or(rest);
+        if !rest.starts_with('/') {
+            return Err(format!("resource location '{uri}' names a remote host"));
+        }
+        rest
+    } else if let Some(rest) = uri.strip_prefix("file:") {
+        if !rest.starts_with('/') {
+            return Err(format!("resource location '{uri}' is not an absolute file URI"));
+        }
+        rest
+    } else {
+        return Err(format!("resource location '{uri}' is not a file:// URI"));
+    };
+    let decoded = percent_encoding::percent_decode_str(path)
+        .decode_utf8()
+        .map_err(|_| format!("resource location '{uri}' is not valid UTF-8 after percent-decoding"))?;
+    let folder = PathBuf::from(decoded.as_ref());
+    if !folder.is_dir() {
+        return Err(format!("resource folder '{}' does not exist", folder.display()));
+    }
+    Ok(folder)
+}
+
+/// `fmi2Instantiate`: NULL, after logging why, for an empty name, a wrong GUID, missing
+/// callbacks or logger, an unusable resource location or a model type other than
+/// co-simulation.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+#[allow(clippy::too_many_arguments)] // mirrors fmi2Instantiate's C signature
+pub unsafe fn instantiate(
+    factory: ModelFactory,
+    instance_name: *const c_char,
+    fmu_type: c_int,
+    guid: *const c_char,
+    resource_location: *const c_char,
+    functions: *const CallbackFunctions,
+    _visible: c_int,
+    logging_on: c_int,
+) -> Component {
+    // SAFETY: per the standard, `functions` points to the host's callbacks if non-null.
+    let Some(functions) = (unsafe { functions.as_ref() }) else { return std::ptr::null_mut() };
+    let Some(logger) = functions.logger else { return std::ptr::null_mut() };
+    let name = unsafe { str_arg(instance_name) }.unwrap_or("");
+    let host = |name: &str| HostLogger { logger, environment: functions.component_environment, name: CString::new(name).unwrap_or_default() };
+    let fail = |message: String| {
+        host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
+        std::ptr::null_mut()
+    };
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Component, String> {
+        if instance_name.is_null() || name.is_empty() {
+            return Err("the instance name is NULL or empty".into());
+        }
+        if fmu_type != FMI2_COSIMULATION {
+            return Err(format!("fmuType {fmu_type} requested, this FMU supports only fmi2CoSimulation (1)"));
+        }
+        let guid = unsafe { str_arg(guid) }.ok_or("the GUID is NULL or not UTF-8")?;
+        let location = unsafe { str_arg(resource_location) }
+            .ok_or("the resource location is NULL: this FMU reads its model from resources/")?;
+        let model = factory(&resource_folder(location)?).map_err(|e| e.to_string())?;
+        let sink_host = host(name);
+        let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
+        let instance = Instance::new(name, guid, model, sink, logging_on != 0).map_err(|e| e.to_string())?;
+        Ok(Box::into_raw(Box::new(Wrapper { instance, strings: Vec::new() })) as Component)
+    }));
+    match result {
+        Ok(Ok(c)) => c,
+        Ok(Err(message)) => fail(message),
+        Err(panic) => fail(format!("internal error ({})", panic_message(&*panic))),
+    }
+}
+
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// `fmi2FreeInstance`.
+///
+/// # Safety
+/// `c` is NULL or a component from [`instantiate`] not freed before.
+pub unsafe fn free_instance(c: Component) {
+    if !c.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) })));
+    }
+}
+
+/// `fmi2SetDebugLogging`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn set_debug_logging(c: Component, on: c_int, n: usize, categories: *const *const c_char) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SetDebugLogging", |w| {
+            let Some(ptrs) = slice(categories, n) else {
+                return w.instance.error("fmi2SetDebugLogging: categories is NULL");
+            };
+            let mut names = Vec::with_capacity(n);
+            for &p in ptrs {
+                match str_arg(p) {
+                    Some(s) => names.push(s),
+                    None => return w.instance.error("fmi2SetDebugLogging: a category is NULL or not UTF-8"),
+                }
+            }
+            w.instance.set_debug_logging(on != 0, &names)
+        })
+    }
+}
+
+/// `fmi2SetupExperiment`.
+///
+/// # Safety
+/// `c` as in the FMI 2.0 standard.
+pub unsafe fn setup_experiment(c: Component, tol_defined: c_int, tol: f64, start: f64, stop_defined: c_int, stop: f64) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SetupExperiment", |w| {
+            w.instance.setup_experiment((tol_defined != 0).then_some(tol), start, (stop_defined != 0).then_some(stop))
+        })
+    }
+}
+
+macro_rules! simple {
+    ($(#[$doc:meta] $fn_name:ident => $method:ident, $c_name:literal;)*) => {$(
+        #[$doc]
+        ///
+        /// # Safety
+        /// `c` as in the FMI 2.0 standard.
+        pub unsafe fn $fn_name(c: Component) -> RawStatus {
+            unsafe { with(c, $c_name, |w| w.instance.$method()) }
+        }
+    )*};
+}
+
+simple! {
+    /// `fmi2EnterInitializationMode`.
+    enter_initialization_mode => enter_initialization_mode, "fmi2EnterInitializationMode";
+    /// `fmi2ExitInitializationMode`.
+    exit_initialization_mode => exit_initialization_mode, "fmi2ExitInitializationMode";
+    /// `fmi2Terminate`.
+    terminate => terminate, "fmi2Terminate";
+    /// `fmi2Reset`.
+    reset => reset, "fmi2Reset";
+}
+
+fn null_argument(w: &Wrapper, function: &str, what: &str) -> Status {
+    w.instance.error(&format!("{function}: {what} is NULL"))
+}
+
+/// `fmi2GetReal`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn get_real(c: Component, vr: *const u32, n: usize, value: *mut f64) -> RawStatus {
+    unsafe {
+        with(c, "fmi2GetReal", |w| match (slice(vr, n), slice_mut(value, n)) {
+            (Some(vr), Some(out)) => w.instance.get_real(vr, out),
+            _ => null_argument(w, "fmi2GetReal", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2GetInteger`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn get_integer(c: Component, vr: *const u32, n: usize, value: *mut c_int) -> RawStatus {
+    unsafe {
+        with(c, "fmi2GetInteger", |w| match (slice(vr, n), slice_mut(value, n)) {
+            (Some(vr), Some(out)) => w.instance.get_integer(vr, out),
+            _ => null_argument(w, "fmi2GetInteger", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2GetBoolean`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn get_boolean(c: Component, vr: *const u32, n: usize, value: *mut c_int) -> RawStatus {
+    unsafe {
+        with(c, "fmi2GetBoolean", |w| match (slice(vr, n), slice_mut(value, n)) {
+            (Some(vr), Some(out)) => {
+                let mut b = vec![false; n];
+                let s = w.instance.get_boolean(vr, &mut b);
+                if s == Status::Ok {
+                    for (o, v) in out.iter_mut().zip(b) {
+                        *o = v as c_int;
+                    }
+                }
+                s
+            }
+            _ => null_argument(w, "fmi2GetBoolean", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2GetString`: the returned pointers stay valid until the next call on this instance.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn get_string(c: Component, vr: *const u32, n: usize, value: *mut *const c_char) -> RawStatus {
+    unsafe {
+        with(c, "fmi2GetString", |w| match (slice(vr, n), slice_mut(value, n)) {
+            (Some(vr), Some(out)) => {
+                let mut s = vec![String::new(); n];
+                let status = w.instance.get_string(vr, &mut s);
+                if status == Status::Ok {
+                    w.strings = s.into_iter().map(|x| CString::new(x.replace('\0', "")).expect("NULs removed")).collect();
+                    for (o, cs) in out.iter_mut().zip(&w.strings) {
+                        *o = cs.as_ptr();
+                    }
+                }
+                status
+            }
+            _ => null_argument(w, "fmi2GetString", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2SetReal`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn set_real(c: Component, vr: *const u32, n: usize, value: *const f64) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SetReal", |w| match (slice(vr, n), slice(value, n)) {
+            (Some(vr), Some(v)) => w.instance.set_real(vr, v),
+            _ => null_argument(w, "fmi2SetReal", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2SetInteger`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn set_integer(c: Component, vr: *const u32, n: usize, value: *const c_int) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SetInteger", |w| match (slice(vr, n), slice(value, n)) {
+            (Some(vr), Some(v)) => w.instance.set_integer(vr, v),
+            _ => null_argument(w, "fmi2SetInteger", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2SetBoolean`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn set_boolean(c: Component, vr: *const u32, n: usize, value: *const c_int) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SetBoolean", |w| match (slice(vr, n), slice(value, n)) {
+            (Some(vr), Some(v)) => {
+                let b: Vec<bool> = v.iter().map(|&x| x != 0).collect();
+                w.instance.set_boolean(vr, &b)
+            }
+            _ => null_argument(w, "fmi2SetBoolean", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2SetString`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn set_string(c: Component, vr: *const u32, n: usize, value: *const *const c_char) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SetString", |w| match (slice(vr, n), slice(value, n)) {
+            (Some(vr), Some(v)) => {
+                let mut strings = Vec::with_capacity(n);
+                for &p in v {
+                    match str_arg(p) {
+                        Some(s) => strings.push(s.to_owned()),
+                        None => return w.instance.error("fmi2SetString: a value is NULL or not UTF-8; nothing was set"),
+                    }
+                }
+                w.instance.set_string(vr, &strings)
+            }
+            _ => null_argument(w, "fmi2SetString", "vr[] or value[]"),
+        })
+    }
+}
+
+/// `fmi2GetFMUstate`: a new state, or the one `*state` points to overwritten.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn get_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi2GetFMUstate", |w| {
+            if state.is_null() {
+                return null_argument(w, "fmi2GetFMUstate", "FMUstate");
+            }
+            match w.instance.get_state() {
+                Ok(snap) => {
+                    store_state(state, snap);
+                    Status::Ok
+                }
+                Err(s) => s,
+            }
+        })
+    }
+}
+
+unsafe fn store_state(state: *mut FmuState, snap: Snapshot) {
+    unsafe {
+        if (*state).is_null() {
+            *state = Box::into_raw(Box::new(snap)) as FmuState;
+        } else {
+            *(*state as *mut Snapshot) = snap;
+        }
+    }
+}
+
+/// `fmi2SetFMUstate`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn set_fmu_state(c: Component, state: FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SetFMUstate", |w| match (state as *const Snapshot).as_ref() {
+            Some(snap) => w.instance.set_state(snap),
+            None => null_argument(w, "fmi2SetFMUstate", "FMUstate"),
+        })
+    }
+}
+
+/// `fmi2FreeFMUstate`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn free_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi2FreeFMUstate", |w| {
+            if let Err(s) = w.instance.check_phase("fmi2FreeFMUstate", Function::FmuState) {
+                return s;
+            }
+            if !state.is_null() && !(*state).is_null() {
+                drop(Box::from_raw(*state as *mut Snapshot));
+                *state = std::ptr::null_mut();
+            }
+            Status::Ok
+        })
+    }
+}
+
+/// `fmi2SerializedFMUstateSize`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn serialized_fmu_state_size(c: Component, state: FmuState, size: *mut usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SerializedFMUstateSize", |w| match ((state as *const Snapshot).as_ref(), size.is_null()) {
+            (Some(snap), false) => match w.instance.serialize(snap) {
+                Ok(bytes) => {
+                    *size = bytes.len();
+                    Status::Ok
+                }
+                Err(s) => s,
+            },
+            _ => null_argument(w, "fmi2SerializedFMUstateSize", "FMUstate or size"),
+        })
+    }
+}
+
+/// `fmi2SerializeFMUstate`: `size` must be the one `fmi2SerializedFMUstateSize` gave.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn serialize_fmu_state(c: Component, state: FmuState, out: *mut u8, size: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi2SerializeFMUstate", |w| match ((state as *const Snapshot).as_ref(), slice_mut(out, size)) {
+            (Some(snap), Some(out)) => match w.instance.serialize(snap) {
+                Ok(bytes) if bytes.len() == out.len() => {
+                    out.copy_from_slice(&bytes);
+                    Status::Ok
+                }
+                Ok(bytes) => w.instance.error(&format!(
+                    "fmi2SerializeFMUstate: size {size} given, the state needs {} bytes",
+                    bytes.len()
+                )),
+                Err(s) => s,
+            },
+            _ => null_argument(w, "fmi2SerializeFMUstate", "FMUstate or serializedState"),
+        })
+    }
+}
+
+/// `fmi2DeSerializeFMUstate`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn deserialize_fmu_state(c: Component, bytes: *const u8, size: usize, state: *mut FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi2DeSerializeFMUstate", |w| match (slice(bytes, size), state.is_null()) {
+            (Some(bytes), false) => match w.instance.deserialize(bytes) {
+                Ok(snap) => {
+                    store_state(state, snap);
+                    Status::Ok
+                }
+                Err(s) => s,
+            },
+            _ => null_argument(w, "fmi2DeSerializeFMUstate", "serializedState or FMUstate"),
+        })
+    }
+}
+
+/// `fmi2DoStep`.
+///
+/// # Safety
+/// `c` as in the FMI 2.0 standard.
+pub unsafe fn do_step(c: Component, current: f64, step: f64, _no_prior: c_int) -> RawStatus {
+    unsafe { with(c, "fmi2DoStep", |w| w.instance.do_step(current, step)) }
+}
+
+/// A function the FMU declares it does not support: `fmi2Error` with a log entry (after the
+/// state check, so an illegal call is reported as such).
+///
+/// # Safety
+/// `c` as in the FMI 2.0 standard.
+pub unsafe fn unsupported(c: Component, name: &str, function: Function, why: &str) -> RawStatus {
+    unsafe {
+        with(c, name, |w| match w.instance.check_phase(name, function) {
+            Err(s) => s,
+            Ok(()) => w.instance.error(&format!("{name}: not supported: {why}")),
+        })
+    }
+}
+
+fn kind_name(kind: c_int) -> &'static str {
+    usize::try_from(kind).ok().and_then(|k| STATUS_KINDS.get(k)).copied().unwrap_or("an unknown status kind")
+}
+
+/// `fmi2GetRealStatus`: only `fmi2LastSuccessfulTime`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn get_real_status(c: Component, kind: c_int, value: *mut f64) -> RawStatus {
+    unsafe {
+        with(c, "fmi2GetRealStatus", |w| {
+            if value.is_null() {
+                return null_argument(w, "fmi2GetRealStatus", "value");
+            }
+            if kind != 2 {
+                return w.instance.error(&format!("fmi2GetRealStatus: {} has no Real value", kind_name(kind)));
+            }
+            match w.instance.last_successful_time() {
+                Ok(t) => {
+                    *value = t;
+                    Status::Ok
+                }
+                Err(s) => s,
+            }
+        })
+    }
+}
+
+/// `fmi2GetBooleanStatus`: only `fmi2Terminated`.
+///
+/// # Safety
+/// Arguments as in the FMI 2.0 standard.
+pub unsafe fn get_boolean_status(c: Component, kind: c_int, value: *mut c_int) -> RawStatus {
+    unsafe {
+        with(c, "fmi2GetBooleanStatus", |w| {
+            if value.is_null() {
+                return null_argument(w, "fmi2GetBooleanStatus", "value");
+            }
+            if kind != 3 {
+                return w.instance.error(&format!("fmi2GetBooleanStatus: {} has no Boolean value", kind_name(kind)));
+            }
+            match w.instance.terminated_status() {
+                Ok(b) => {
+                    *value = b as c_int;
+                    Status::Ok
+                }
+                Err(s) => s,
+            }
+        })
+    }
+}
+
+/// `fmi2GetStatus`, `fmi2GetIntegerStatus`, `fmi2GetStringStatus`: these ask about
+/// asynchronous steps, which this FMU never takes (it never returns `fmi2Pending`).
+///
+/// # Safety
+/// `c` as in the FMI 2.0 standard.
+pub unsafe fn status_without_value(c: Component, name: &str, kind: c_int) -> RawStatus {
+    let why = format!("{} is only defined after fmi2DoStep returned fmi2Pending, which this FMU never does", kind_name(kind));
+    unsafe { unsupported(c, name, Function::GetStatus, &why) }
+}
+
+/// Emits every FMI 2.0 common and co-simulation function as an `extern "C"` symbol, for a
+/// `cdylib` that serves the models `factory` (a [`ModelFactory`](crate::ModelFactory)) makes.
+/// Invoke it once, at the crate's top level.
+#[macro_export]
+macro_rules! export_fmi2 {
+    ($factory:path) => {
+        // Bound here, where `$factory` resolves as the caller wrote it.
+        #[doc(hidden)]
+        const __FMI2_EXPORT_FACTORY: $crate::ModelFactory = $factory;
+
+        #[doc(hidden)]
+        mod fmi2_exports {
+            use std::ffi::{c_char, c_int};
+            use $crate::abi::{self, CallbackFunctions, Component, FmuState, RawStatus};
+            use $crate::instance::Function;
+
+            #[no_mangle]
+            pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+                c"default".as_ptr()
+            }
+            #[no_mangle]
+            pub extern "C" fn fmi2GetVersion() -> *const c_char {
+                c"2.0".as_ptr()
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetDebugLogging(c: Component, on: c_int, n: usize, cats: *const *const c_char) -> RawStatus {
+                unsafe { abi::set_debug_logging(c, on, n, cats) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2Instantiate(
+                name: *const c_char,
+                fmu_type: c_int,
+                guid: *const c_char,
+                resources: *const c_char,
+                functions: *const CallbackFunctions,
+                visible: c_int,
+                logging_on: c_int,
+            ) -> Component {
+                unsafe { abi::instantiate(super::__FMI2_EXPORT_FACTORY, name, fmu_type, guid, resources, functions, visible, logging_on) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2FreeInstance(c: Component) {
+                unsafe { abi::free_instance(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetupExperiment(c: Component, td: c_int, tol: f64, start: f64, sd: c_int, stop: f64) -> RawStatus {
+                unsafe { abi::setup_experiment(c, td, tol, start, sd, stop) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2EnterInitializationMode(c: Component) -> RawStatus {
+                unsafe { abi::enter_initialization_mode(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2ExitInitializationMode(c: Component) -> RawStatus {
+                unsafe { abi::exit_initialization_mode(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2Terminate(c: Component) -> RawStatus {
+                unsafe { abi::terminate(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2Reset(c: Component) -> RawStatus {
+                unsafe { abi::reset(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetReal(c: Component, vr: *const u32, n: usize, v: *mut f64) -> RawStatus {
+                unsafe { abi::get_real(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetInteger(c: Component, vr: *const u32, n: usize, v: *mut c_int) -> RawStatus {
+                unsafe { abi::get_integer(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetBoolean(c: Component, vr: *const u32, n: usize, v: *mut c_int) -> RawStatus {
+                unsafe { abi::get_boolean(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetString(c: Component, vr: *const u32, n: usize, v: *mut *const c_char) -> RawStatus {
+                unsafe { abi::get_string(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetReal(c: Component, vr: *const u32, n: usize, v: *const f64) -> RawStatus {
+                unsafe { abi::set_real(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetInteger(c: Component, vr: *const u32, n: usize, v: *const c_int) -> RawStatus {
+                unsafe { abi::set_integer(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetBoolean(c: Component, vr: *const u32, n: usize, v: *const c_int) -> RawStatus {
+                unsafe { abi::set_boolean(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetString(c: Component, vr: *const u32, n: usize, v: *const *const c_char) -> RawStatus {
+                unsafe { abi::set_string(c, vr, n, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetFMUstate(c: Component, s: *mut FmuState) -> RawStatus {
+                unsafe { abi::get_fmu_state(c, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetFMUstate(c: Component, s: FmuState) -> RawStatus {
+                unsafe { abi::set_fmu_state(c, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2FreeFMUstate(c: Component, s: *mut FmuState) -> RawStatus {
+                unsafe { abi::free_fmu_state(c, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SerializedFMUstateSize(c: Component, s: FmuState, size: *mut usize) -> RawStatus {
+                unsafe { abi::serialized_fmu_state_size(c, s, size) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SerializeFMUstate(c: Component, s: FmuState, out: *mut u8, size: usize) -> RawStatus {
+                unsafe { abi::serialize_fmu_state(c, s, out, size) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: Component, b: *const u8, size: usize, s: *mut FmuState) -> RawStatus {
+                unsafe { abi::deserialize_fmu_state(c, b, size, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+                c: Component,
+                _unknown: *const u32,
+                _n_unknown: usize,
+                _known: *const u32,
+                _n_known: usize,
+                _dv_known: *const f64,
+                _dv_unknown: *mut f64,
+            ) -> RawStatus {
+                unsafe {
+                    abi::unsupported(c, "fmi2GetDirectionalDerivative", Function::GetDirectionalDerivative, "providesDirectionalDerivative is false")
+                }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+                c: Component,
+                _vr: *const u32,
+                _n: usize,
+                _order: *const c_int,
+                _v: *const f64,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi2SetRealInputDerivatives", Function::SetRealInputDerivatives, "canInterpolateInputs is false") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+                c: Component,
+                _vr: *const u32,
+                _n: usize,
+                _order: *const c_int,
+                _v: *mut f64,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi2GetRealOutputDerivatives", Function::GetRealOutputDerivatives, "maxOutputDerivativeOrder is 0") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2DoStep(c: Component, t: f64, h: f64, no_prior: c_int) -> RawStatus {
+                unsafe { abi::do_step(c, t, h, no_prior) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2CancelStep(c: Component) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi2CancelStep", Function::CancelStep, "steps are never asynchronous") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetStatus(c: Component, kind: c_int, _v: *mut c_int) -> RawStatus {
+                unsafe { abi::status_without_value(c, "fmi2GetStatus", kind) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetRealStatus(c: Component, kind: c_int, v: *mut f64) -> RawStatus {
+                unsafe { abi::get_real_status(c, kind, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetIntegerStatus(c: Component, kind: c_int, _v: *mut c_int) -> RawStatus {
+                unsafe { abi::status_without_value(c, "fmi2GetIntegerStatus", kind) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetBooleanStatus(c: Component, kind: c_int, v: *mut c_int) -> RawStatus {
+                unsafe { abi::get_boolean_status(c, kind, v) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi2GetStringStatus(c: Component, kind: c_int, _v: *mut *const c_char) -> RawStatus {
+                unsafe { abi::status_without_value(c, "fmi2GetStringStatus", kind) }
+            }
+        }
+    };
+}

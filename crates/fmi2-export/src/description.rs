@@ -1,0 +1,632 @@
+//! A model's interface as one table of variables, and the `modelDescription.xml` written
+//! from it. The ABI's dispatch reads the same table, so the two cannot disagree.
+
+use std::io::Cursor;
+
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
+use quick_xml::Writer;
+
+/// FMI 2.0 causality of a variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Causality {
+    /// Set by the environment before initialization (or while running, if tunable).
+    Parameter,
+    /// Set by the environment at each communication point.
+    Input,
+    /// Computed by the model.
+    Output,
+    /// Internal, visible for inspection.
+    Local,
+    /// The independent variable, time.
+    Independent,
+}
+
+impl Causality {
+    /// The name `modelDescription.xml` uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Causality::Parameter => "parameter",
+            Causality::Input => "input",
+            Causality::Output => "output",
+            Causality::Local => "local",
+            Causality::Independent => "independent",
+        }
+    }
+}
+
+/// FMI 2.0 variability of a variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variability {
+    /// Never changes.
+    Constant,
+    /// Fixed after initialization.
+    Fixed,
+    /// Changes only at communication points when set by the environment.
+    Tunable,
+    /// Changes only at discrete instants.
+    Discrete,
+    /// May change continuously.
+    Continuous,
+}
+
+impl Variability {
+    /// The name `modelDescription.xml` uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variability::Constant => "constant",
+            Variability::Fixed => "fixed",
+            Variability::Tunable => "tunable",
+            Variability::Discrete => "discrete",
+            Variability::Continuous => "continuous",
+        }
+    }
+}
+
+/// A unit, as FMI 2.0 defines one: a name and its relation to the SI base units,
+/// `value in base units = factor · value + offset`, with base units kg^kg · m^m · s^s · A^a ·
+/// K^k · mol^mol · cd^cd · rad^rad. Models declare the units they use; the `UnitDefinitions`
+/// of `modelDescription.xml` list exactly those.
+///
+/// ```
+/// use fmi2_export::description::Unit;
+/// // N·m = kg·m²·s⁻²
+/// const NEWTON_METRE: Unit = Unit::new("N.m").kg(1).m(2).s(-2);
+/// assert_eq!(NEWTON_METRE.exponents(), [1, 2, -2, 0, 0, 0, 0, 0]);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Unit {
+    /// Name as variables refer to it, e.g. `"N.m"`.
+    pub name: &'static str,
+    exponents: [i8; 8],
+    /// Factor to the base units (1 for a coherent SI unit).
+    pub factor: f64,
+    /// Offset to the base units (0 but for temperature scales).
+    pub offset: f64,
+}
+
+/// Names of the SI base units in [`Unit::exponents`] order, as `BaseUnit` attributes.
+const BASE_UNITS: [&str; 8] = ["kg", "m", "s", "A", "K", "mol", "cd", "rad"];
+
+impl Unit {
+    /// The second, the unit of time.
+    pub const SECOND: Unit = Unit::new("s").s(1);
+
+    /// A dimensionless unit called `name` (factor 1, offset 0); give it dimensions with the
+    /// base-unit methods.
+    pub const fn new(name: &'static str) -> Self {
+        Self { name, exponents: [0; 8], factor: 1.0, offset: 0.0 }
+    }
+
+    const fn with(mut self, index: usize, exponent: i8) -> Self {
+        self.exponents[index] = exponent;
+        self
+    }
+
+    /// With kilogram to the power `e`.
+    pub const fn kg(self, e: i8) -> Self {
+        self.with(0, e)
+    }
+    /// With metre to the power `e`.
+    pub const fn m(self, e: i8) -> Self {
+        self.with(1, e)
+    }
+    /// With second to the power `e`.
+    pub const fn s(self, e: i8) -> Self {
+        self.with(2, e)
+    }
+    /// With ampere to the power `e`.
+    pub const fn ampere(self, e: i8) -> Self {
+        self.with(3, e)
+    }
+    /// With kelvin to the power `e`.
+    pub const fn kelvin(self, e: i8) -> Self {
+        self.with(4, e)
+    }
+    /// With mole to the power `e`.
+    pub const fn mol(self, e: i8) -> Self {
+        self.with(5, e)
+    }
+    /// With candela to the power `e`.
+    pub const fn cd(self, e: i8) -> Self {
+        self.with(6, e)
+    }
+    /// With radian to the power `e`.
+    pub const fn rad(self, e: i8) -> Self {
+        self.with(7, e)
+    }
+    /// With `factor` and `offset` to the base units.
+    pub const fn scaled(mut self, factor: f64, offset: f64) -> Self {
+        self.factor = factor;
+        self.offset = offset;
+        self
+    }
+
+    /// Exponents of kg, m, s, A, K, mol, cd, rad.
+    pub const fn exponents(&self) -> [i8; 8] {
+        self.exponents
+    }
+}
+
+/// Type, start value and unit of a variable.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Kind {
+    /// A real number, with its unit if it has one.
+    Real {
+        /// Start value; `None` for computed outputs and the independent variable.
+        start: Option<f64>,
+        /// Unit; `None` for a plain number.
+        unit: Option<Unit>,
+    },
+    /// A 32-bit integer.
+    Integer {
+        /// Start value.
+        start: Option<i32>,
+    },
+    /// A Boolean.
+    Boolean {
+        /// Start value.
+        start: Option<bool>,
+    },
+    /// A string.
+    String {
+        /// Start value.
+        start: Option<String>,
+    },
+}
+
+impl Kind {
+    /// The start value as `modelDescription.xml` writes it, if there is one.
+    pub fn start_text(&self) -> Option<String> {
+        match self {
+            Kind::Real { start, .. } => start.map(|s| s.to_string()),
+            Kind::Integer { start } => start.map(|s| s.to_string()),
+            Kind::Boolean { start } => start.map(|s| s.to_string()),
+            Kind::String { start } => start.clone(),
+        }
+    }
+
+    /// The unit of a real, if any.
+    pub fn unit(&self) -> Option<&Unit> {
+        match self {
+            Kind::Real { unit, .. } => unit.as_ref(),
+            _ => None,
+        }
+    }
+}
+
+/// The FMI base type of a variable, without start value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BaseType {
+    /// `fmi2Real`.
+    Real,
+    /// `fmi2Integer`.
+    Integer,
+    /// `fmi2Boolean`.
+    Boolean,
+    /// `fmi2String`.
+    String,
+}
+
+impl BaseType {
+    /// The XML element name.
+    pub fn name(self) -> &'static str {
+        match self {
+            BaseType::Real => "Real",
+            BaseType::Integer => "Integer",
+            BaseType::Boolean => "Boolean",
+            BaseType::String => "String",
+        }
+    }
+
+    /// Position in per-type arrays: Real, Integer, Boolean, String.
+    pub(crate) fn slot(self) -> usize {
+        self as usize
+    }
+}
+
+/// One scalar variable of a model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variable {
+    /// Unique name.
+    pub name: String,
+    /// Value reference, unique within the variable's base type.
+    pub value_reference: u32,
+    /// Causality.
+    pub causality: Causality,
+    /// Variability.
+    pub variability: Variability,
+    /// Type, start and unit.
+    pub kind: Kind,
+    /// Human-readable description, with units in words where helpful.
+    pub description: String,
+    /// For outputs: the 1-based indices of the inputs this output depends on directly
+    /// (`dependencies` in `ModelStructure/Outputs`); empty for none.
+    pub output_dependencies: Vec<usize>,
+}
+
+impl Variable {
+    /// The base type.
+    pub fn base_type(&self) -> BaseType {
+        match self.kind {
+            Kind::Real { .. } => BaseType::Real,
+            Kind::Integer { .. } => BaseType::Integer,
+            Kind::Boolean { .. } => BaseType::Boolean,
+            Kind::String { .. } => BaseType::String,
+        }
+    }
+
+    /// Whether `fmi2Set*` may change this variable in `phase` (FMI 2.0, section 4.2.4).
+    pub fn settable_in(&self, phase: SetPhase) -> bool {
+        use Causality::*;
+        match self.causality {
+            Output | Independent | Local => false,
+            Input => true,
+            Parameter => match phase {
+                SetPhase::Instantiated | SetPhase::Initialization => self.variability != Variability::Constant,
+                SetPhase::Running => self.variability == Variability::Tunable,
+            },
+        }
+    }
+}
+
+/// When a set call happens, for the rules on what may be set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetPhase {
+    /// After instantiation, before initialization mode.
+    Instantiated,
+    /// In initialization mode.
+    Initialization,
+    /// Between steps.
+    Running,
+}
+
+/// A log category the layer declares.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LogCategory {
+    /// Name passed to `fmi2SetDebugLogging`.
+    pub name: &'static str,
+    /// What it reports.
+    pub description: &'static str,
+}
+
+/// The categories every FMU of this layer declares.
+pub const LOG_CATEGORIES: &[LogCategory] = &[
+    LogCategory { name: "logStatusError", description: "Calls that return fmi2Error or fmi2Fatal, and why" },
+    LogCategory { name: "logStatusWarning", description: "Calls that return fmi2Warning, and why" },
+    LogCategory { name: "logCalls", description: "Every FMI call with its arguments (verbose)" },
+];
+
+/// Start, stop and step the model suggests to a master.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DefaultExperiment {
+    /// Start time [s].
+    pub start_time: f64,
+    /// Stop time [s].
+    pub stop_time: f64,
+    /// Communication step [s].
+    pub step_size: f64,
+}
+
+/// Why a variable table cannot describe an FMU.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DescriptionError {
+    /// Two variables have the same name.
+    #[error("variable name '{0}' repeated")]
+    RepeatedName(String),
+    /// Two variables of one base type have the same value reference.
+    #[error("value reference {value_reference} of '{name}' repeated")]
+    RepeatedValueReference {
+        /// The second variable with it.
+        name: String,
+        /// The value reference.
+        value_reference: u32,
+    },
+    /// A parameter or input without a start value.
+    #[error("'{0}' needs a start value")]
+    MissingStart(String),
+    /// An output or the independent variable with a start value.
+    #[error("'{0}' must not have a start value")]
+    ForbiddenStart(String),
+    /// An output dependency that is not an input, or a dependency listed by a non-output.
+    #[error("'{name}' lists dependency {index}, which is not an input")]
+    BadDependency {
+        /// The variable listing it.
+        name: String,
+        /// The 1-based index listed.
+        index: usize,
+    },
+    /// Two units of the same name with different definitions.
+    #[error("unit '{0}' is declared twice with different definitions")]
+    UnitConflict(&'static str),
+    /// A model identifier that is no C identifier.
+    #[error("model identifier '{0}' must start with a letter or '_' and hold only ASCII letters, digits and '_'")]
+    BadIdentifier(String),
+}
+
+/// A model's complete interface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelDescription {
+    /// Model name.
+    pub model_name: String,
+    /// Model identifier: the name of the shared library in `binaries/` and a C identifier.
+    pub model_identifier: String,
+    /// One-line description.
+    pub description: String,
+    /// `generationTool`: what made the FMU, e.g. `"mytool 1.2"`.
+    pub generation_tool: String,
+    /// Suggested experiment, if any.
+    pub default_experiment: Option<DefaultExperiment>,
+    /// The variables, in `ModelVariables` order.
+    pub variables: Vec<Variable>,
+}
+
+impl ModelDescription {
+    /// A checked description of the model `identifier` (also its name), generated by this
+    /// crate and with no default experiment; set those fields to change them.
+    pub fn new(identifier: &str, description: impl Into<String>, variables: Vec<Variable>) -> Result<Self, DescriptionError> {
+        let d = Self {
+            model_name: identifier.to_owned(),
+            model_identifier: identifier.to_owned(),
+            description: description.into(),
+            generation_tool: concat!("fmi2-export ", env!("CARGO_PKG_VERSION")).to_owned(),
+            default_experiment: None,
+            variables,
+        };
+        d.check()?;
+        Ok(d)
+    }
+
+    /// The same description generated by `tool`.
+    pub fn with_generation_tool(mut self, tool: impl Into<String>) -> Self {
+        self.generation_tool = tool.into();
+        self
+    }
+
+    /// The same description suggesting `experiment`.
+    pub fn with_default_experiment(mut self, experiment: DefaultExperiment) -> Self {
+        self.default_experiment = Some(experiment);
+        self
+    }
+
+    /// The GUID: a UUID (v5) of the model description with an empty GUID, so any change of
+    /// the interface or of a start value gives a new one.
+    pub fn guid(&self) -> String {
+        let xml = self.xml_with_guid("");
+        let namespace = uuid::Uuid::from_bytes(*b"fmi2-export.guid");
+        format!("{{{}}}", uuid::Uuid::new_v5(&namespace, xml.as_bytes()))
+    }
+
+    /// `modelDescription.xml`.
+    pub fn to_xml(&self) -> String {
+        self.xml_with_guid(&self.guid())
+    }
+
+    /// The units the variables use, each once, in order of first use.
+    pub fn units(&self) -> Vec<&Unit> {
+        let mut used: Vec<&Unit> = Vec::new();
+        for u in self.variables.iter().filter_map(|v| v.kind.unit()) {
+            if !used.iter().any(|x| x.name == u.name) {
+                used.push(u);
+            }
+        }
+        used
+    }
+
+    /// Checks the table: a C identifier, unique names, value references unique per type,
+    /// start values where FMI requires them and nowhere it forbids them, dependencies
+    /// pointing at inputs, one definition per unit name.
+    pub fn check(&self) -> Result<(), DescriptionError> {
+        check_identifier(&self.model_identifier)?;
+        let mut names = std::collections::HashSet::new();
+        let mut refs = std::collections::HashSet::new();
+        let mut units: Vec<&Unit> = Vec::new();
+        for v in &self.variables {
+            if !names.insert(v.name.as_str()) {
+                return Err(DescriptionError::RepeatedName(v.name.clone()));
+            }
+            if !refs.insert((v.base_type(), v.value_reference)) {
+                return Err(DescriptionError::RepeatedValueReference { name: v.name.clone(), value_reference: v.value_reference });
+            }
+            if let Some(u) = v.kind.unit() {
+                match units.iter().find(|x| x.name == u.name) {
+                    Some(x) if *x != u => return Err(DescriptionError::UnitConflict(u.name)),
+                    Some(_) => {}
+                    None => units.push(u),
+                }
+            }
+            let has_start = v.kind.start_text().is_some();
+            let needs_start = matches!(v.causality, Causality::Parameter | Causality::Input);
+            let forbids_start = matches!(v.causality, Causality::Output | Causality::Independent);
+            if needs_start && !has_start {
+                return Err(DescriptionError::MissingStart(v.name.clone()));
+            }
+            if forbids_start && has_start {
+                return Err(DescriptionError::ForbiddenStart(v.name.clone()));
+            }
+            for &d in &v.output_dependencies {
+                let ok = self.variables.get(d.wrapping_sub(1)).is_some_and(|x| x.causality == Causality::Input);
+                if v.causality != Causality::Output || !ok {
+                    return Err(DescriptionError::BadDependency { name: v.name.clone(), index: d });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn xml_with_guid(&self, guid: &str) -> String {
+        let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+        let ok = "writing XML to memory cannot fail";
+        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).expect(ok);
+        let root = BytesStart::new("fmiModelDescription").with_attributes([
+            ("fmiVersion", "2.0"),
+            ("modelName", self.model_name.as_str()),
+            ("guid", guid),
+            ("description", self.description.as_str()),
+            ("generationTool", self.generation_tool.as_str()),
+            ("variableNamingConvention", "flat"),
+            ("numberOfEventIndicators", "0"),
+        ]);
+        w.write_event(Event::Start(root)).expect(ok);
+        w.write_event(Event::Empty(BytesStart::new("CoSimulation").with_attributes([
+            ("modelIdentifier", self.model_identifier.as_str()),
+            ("canHandleVariableCommunicationStepSize", "true"),
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            ("canNotUseMemoryManagementFunctions", "true"),
+        ])))
+        .expect(ok);
+
+        let units = self.units();
+        if !units.is_empty() {
+            w.write_event(Event::Start(BytesStart::new("UnitDefinitions"))).expect(ok);
+            for u in units {
+                w.write_event(Event::Start(BytesStart::new("Unit").with_attributes([("name", u.name)]))).expect(ok);
+                let mut attributes: Vec<(&str, String)> =
+                    BASE_UNITS.iter().zip(u.exponents).filter(|(_, e)| *e != 0).map(|(n, e)| (*n, e.to_string())).collect();
+                if u.factor != 1.0 {
+                    attributes.push(("factor", u.factor.to_string()));
+                }
+                if u.offset != 0.0 {
+                    attributes.push(("offset", u.offset.to_string()));
+                }
+                let base = BytesStart::new("BaseUnit").with_attributes(attributes.iter().map(|(n, e)| (*n, e.as_str())));
+                w.write_event(Event::Empty(base)).expect(ok);
+                w.write_event(Event::End(BytesEnd::new("Unit"))).expect(ok);
+            }
+            w.write_event(Event::End(BytesEnd::new("UnitDefinitions"))).expect(ok);
+        }
+
+        w.write_event(Event::Start(BytesStart::new("LogCategories"))).expect(ok);
+        for c in LOG_CATEGORIES {
+            let e = BytesStart::new("Category").with_attributes([("name", c.name), ("description", c.description)]);
+            w.write_event(Event::Empty(e)).expect(ok);
+        }
+        w.write_event(Event::End(BytesEnd::new("LogCategories"))).expect(ok);
+
+        if let Some(de) = &self.default_experiment {
+            let (start, stop, step) = (de.start_time.to_string(), de.stop_time.to_string(), de.step_size.to_string());
+            w.write_event(Event::Empty(BytesStart::new("DefaultExperiment").with_attributes([
+                ("startTime", start.as_str()),
+                ("stopTime", stop.as_str()),
+                ("stepSize", step.as_str()),
+            ])))
+            .expect(ok);
+        }
+
+        w.write_event(Event::Start(BytesStart::new("ModelVariables"))).expect(ok);
+        for v in &self.variables {
+            let vr = v.value_reference.to_string();
+            let mut sv = BytesStart::new("ScalarVariable").with_attributes([
+                ("name", v.name.as_str()),
+                ("valueReference", vr.as_str()),
+                ("description", v.description.as_str()),
+                ("causality", v.causality.name()),
+                ("variability", v.variability.name()),
+            ]);
+            match v.causality {
+                Causality::Parameter => sv.push_attribute(("initial", "exact")),
+                Causality::Output => sv.push_attribute(("initial", "calculated")),
+                _ => {}
+            }
+            w.write_event(Event::Start(sv)).expect(ok);
+            let mut t = BytesStart::new(v.base_type().name());
+            if let Some(unit) = v.kind.unit() {
+                t.push_attribute(("unit", unit.name));
+            }
+            if let Some(start) = v.kind.start_text() {
+                t.push_attribute(("start", start.as_str()));
+            }
+            w.write_event(Event::Empty(t)).expect(ok);
+            w.write_event(Event::End(BytesEnd::new("ScalarVariable"))).expect(ok);
+        }
+        w.write_event(Event::End(BytesEnd::new("ModelVariables"))).expect(ok);
+
+        // ModelStructure indices are 1-based positions in ModelVariables.
+        let outputs: Vec<(usize, &Variable)> =
+            self.variables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, v)| (i + 1, v)).collect();
+        w.write_event(Event::Start(BytesStart::new("ModelStructure"))).expect(ok);
+        if !outputs.is_empty() {
+            w.write_event(Event::Start(BytesStart::new("Outputs"))).expect(ok);
+            for (index, v) in &outputs {
+                let deps = v.output_dependencies.iter().map(usize::to_string).collect::<Vec<_>>().join(" ");
+                let kinds = vec!["dependent"; v.output_dependencies.len()].join(" ");
+                let index = index.to_string();
+                let mut u = BytesStart::new("Unknown").with_attributes([("index", index.as_str()), ("dependencies", deps.as_str())]);
+                u.push_attribute(("dependenciesKind", kinds.as_str()));
+                w.write_event(Event::Empty(u)).expect(ok);
+            }
+            w.write_event(Event::End(BytesEnd::new("Outputs"))).expect(ok);
+            // Every output is calculated during initialization from parameters (and, with
+            // direct feedthrough, inputs); no dependencies attribute means "may depend on all".
+            w.write_event(Event::Start(BytesStart::new("InitialUnknowns"))).expect(ok);
+            for (index, _) in &outputs {
+                let index = index.to_string();
+                w.write_event(Event::Empty(BytesStart::new("Unknown").with_attributes([("index", index.as_str())]))).expect(ok);
+            }
+            w.write_event(Event::End(BytesEnd::new("InitialUnknowns"))).expect(ok);
+        }
+        w.write_event(Event::End(BytesEnd::new("ModelStructure"))).expect(ok);
+        w.write_event(Event::End(BytesEnd::new("fmiModelDescription"))).expect(ok);
+        let mut text = String::from_utf8(w.into_inner().into_inner()).expect("XML is UTF-8");
+        text.push('\n');
+        text
+    }
+}
+
+/// A model identifier must be usable as a C identifier and a file name.
+pub fn check_identifier(id: &str) -> Result<(), DescriptionError> {
+    let mut chars = id.chars();
+    let ok = chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_') && chars.all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if ok {
+        Ok(())
+    } else {
+        Err(DescriptionError::BadIdentifier(id.to_owned()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::table::TableBuilder;
+
+    const NEWTON_METRE: Unit = Unit::new("N.m").kg(1).m(2).s(-2);
+
+    #[test]
+    fn unit_definitions_are_the_units_used_each_once() {
+        let mut b = TableBuilder::new();
+        let u = b.input("tau", NEWTON_METRE, 0.0, "torque");
+        b.output("y", NEWTON_METRE, "twice", &[u]);
+        b.parameter("k", None, 2.0, "plain number");
+        let d = ModelDescription::new("Twice", "y = 2 tau", b.finish()).unwrap();
+        let xml = d.to_xml();
+        let defs = &xml[xml.find("<UnitDefinitions>").unwrap()..xml.find("</UnitDefinitions>").unwrap()];
+        assert_eq!(defs.matches("<Unit ").count(), 2, "s (time) and N.m: {defs}");
+        assert!(defs.contains(r#"<Unit name="N.m">"#) && defs.contains(r#"<BaseUnit kg="1" m="2" s="-2"/>"#), "{defs}");
+        assert!(defs.contains(r#"<Unit name="s">"#) && defs.contains(r#"<BaseUnit s="1"/>"#), "{defs}");
+        assert!(!xml.contains("DefaultExperiment"), "none unless the model suggests one");
+    }
+
+    #[test]
+    fn a_unit_name_with_two_definitions_is_refused() {
+        let mut b = TableBuilder::new();
+        b.parameter("a", Unit::new("N.m").kg(1).m(2).s(-2), 1.0, "");
+        b.parameter("b", Unit::new("N.m").kg(1).m(1).s(-2), 1.0, "");
+        assert_eq!(ModelDescription::new("Two", "", b.finish()).unwrap_err(), DescriptionError::UnitConflict("N.m"));
+    }
+
+    #[test]
+    fn scaled_units_write_factor_and_offset() {
+        let mut b = TableBuilder::new();
+        b.parameter("t", Unit::new("degC").kelvin(1).scaled(1.0, 273.15), 20.0, "temperature");
+        let xml = ModelDescription::new("Temp", "", b.finish()).unwrap().to_xml();
+        assert!(xml.contains(r#"<BaseUnit K="1" offset="273.15"/>"#), "{xml}");
+    }
+
+    #[test]
+    fn identifiers_must_be_c_identifiers() {
+        for bad in ["", "1abc", "a-b", "a b", "ä"] {
+            assert!(ModelDescription::new(bad, "", TableBuilder::new().finish()).is_err(), "{bad:?}");
+        }
+        assert!(ModelDescription::new("_Arm2", "", TableBuilder::new().finish()).is_ok());
+    }
+}

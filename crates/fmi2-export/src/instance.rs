@@ -1,0 +1,643 @@
+//! One FMU instance in safe Rust: the FMI 2.0 Co-Simulation state machine, argument checks,
+//! logging and FMU states. The C ABI ([`super::abi`]) only converts pointers and catches
+//! panics; every rule lives here.
+//!
+//! Refusals and failures:
+//! * a call in a state that does not allow it, or with a bad argument (unknown value
+//!   reference, wrong type, a variable that may not be set now, NaN, h <= 0, a wrong
+//!   communication point), returns `Error` after logging why, and changes nothing: the
+//!   instance goes on as before (as the Modelica Reference-FMUs do);
+//! * a failure of the model itself (invalid parameters at initialization, a step that cannot
+//!   be taken) returns `Error` and puts the instance in the error state, where the standard
+//!   allows only getting values, restoring an FMU state, `fmi2Reset` and `fmi2FreeInstance`.
+
+use crate::codec::{Put, Reader, StateError};
+use crate::description::{BaseType, ModelDescription, SetPhase, LOG_CATEGORIES};
+use crate::model::{Model, Values};
+
+/// `fmi2Status`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[repr(i32)]
+pub enum Status {
+    /// `fmi2OK`.
+    Ok = 0,
+    /// `fmi2Warning`.
+    Warning = 1,
+    /// `fmi2Discard`.
+    Discard = 2,
+    /// `fmi2Error`.
+    Error = 3,
+    /// `fmi2Fatal`.
+    Fatal = 4,
+    /// `fmi2Pending`.
+    Pending = 5,
+}
+
+/// The instance's place in the FMI 2.0 Co-Simulation state machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// After `fmi2Instantiate` or `fmi2Reset`.
+    Instantiated = 1 << 0,
+    /// Between `fmi2EnterInitializationMode` and `fmi2ExitInitializationMode`.
+    InitializationMode = 1 << 1,
+    /// Ready for `fmi2DoStep`.
+    StepComplete = 1 << 2,
+    /// A step returned `fmi2Discard`.
+    StepFailed = 1 << 3,
+    /// A step was cancelled.
+    StepCanceled = 1 << 4,
+    /// After `fmi2Terminate`.
+    Terminated = 1 << 5,
+    /// After a failure of the model.
+    Error = 1 << 6,
+    /// After a panic was caught: only `fmi2FreeInstance` is allowed.
+    Fatal = 1 << 7,
+}
+
+/// The FMI functions that take an instance, each with the phases that allow it (FMI 2.0 CS
+/// state machine, section 4.2.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(missing_docs)]
+pub enum Function {
+    SetDebugLogging,
+    SetupExperiment,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    GetValues,
+    SetReal,
+    SetOther,
+    FmuState,
+    GetDirectionalDerivative,
+    SetRealInputDerivatives,
+    GetRealOutputDerivatives,
+    DoStep,
+    CancelStep,
+    GetStatus,
+}
+
+const AFTER_INSTANTIATE: u16 = Phase::Instantiated as u16
+    | Phase::InitializationMode as u16
+    | Phase::StepComplete as u16
+    | Phase::StepFailed as u16
+    | Phase::StepCanceled as u16
+    | Phase::Terminated as u16
+    | Phase::Error as u16;
+const AFTER_INIT_MODE: u16 = AFTER_INSTANTIATE & !(Phase::Instantiated as u16);
+
+impl Function {
+    /// Phases (bit mask of [`Phase`]) in which the function may be called.
+    pub fn allowed(self) -> u16 {
+        use Phase::*;
+        match self {
+            Function::SetDebugLogging | Function::Reset | Function::FmuState => AFTER_INSTANTIATE,
+            Function::SetupExperiment | Function::EnterInitializationMode => Instantiated as u16,
+            Function::ExitInitializationMode => InitializationMode as u16,
+            Function::Terminate => StepComplete as u16 | StepFailed as u16,
+            Function::GetValues | Function::GetDirectionalDerivative => AFTER_INIT_MODE,
+            Function::SetReal | Function::SetOther | Function::SetRealInputDerivatives => {
+                Instantiated as u16 | InitializationMode as u16 | StepComplete as u16
+            }
+            Function::GetRealOutputDerivatives => AFTER_INIT_MODE & !(InitializationMode as u16),
+            Function::DoStep => StepComplete as u16,
+            Function::CancelStep => 0,
+            Function::GetStatus => StepComplete as u16 | StepFailed as u16 | Terminated as u16,
+        }
+    }
+}
+
+/// Receives the instance's log messages: status, category, message.
+pub type LogSink = Box<dyn Fn(Status, &str, &str) + Send>;
+
+/// A saved FMU state (`fmi2FMUstate`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Snapshot {
+    phase: Phase,
+    time: f64,
+    start_time: f64,
+    values: Values,
+    model: Vec<u8>,
+}
+
+/// Why an instance could not be made.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum InstantiateError {
+    /// `instanceName` is empty.
+    #[error("the instance name is empty")]
+    EmptyName,
+    /// The host's GUID is not the model's.
+    #[error("GUID {given} does not match this FMU's {expected}: the modelDescription.xml and the binary or resources differ")]
+    WrongGuid {
+        /// The GUID the host passed.
+        given: String,
+        /// The model's.
+        expected: String,
+    },
+}
+
+/// One instance of a model.
+pub struct Instance {
+    name: String,
+    guid: String,
+    model: Box<dyn Model>,
+    values: Values,
+    start_values: Values,
+    phase: Phase,
+    start_time: f64,
+    time: f64,
+    dirty: bool,
+    log: LogSink,
+    debug_logging: bool,
+    categories: Vec<bool>,
+    /// Variable index by base type (in [`BaseType`] order) and value reference; value
+    /// references are dense per type, so a vector beats a hash map on the hot path.
+    lookup: [Vec<Option<usize>>; 4],
+}
+
+/// Magic bytes at the start of a serialized FMU state.
+const STATE_MAGIC: &[u8; 8] = b"F2XSTATE";
+/// Version of the serialized FMU state format.
+const STATE_VERSION: u32 = 1;
+
+fn phase_from(code: u8) -> Result<Phase, StateError> {
+    use Phase::*;
+    [Instantiated, InitializationMode, StepComplete, StepFailed, StepCanceled, Terminated, Error, Fatal]
+        .into_iter()
+        .find(|p| u32::from(*p as u16) == 1u32.checked_shl(code.into()).unwrap_or(0))
+        .ok_or_else(|| StateError::Invalid(format!("unknown phase code {code}")))
+}
+
+impl Instance {
+    /// A new instance of `model` called `name`, if `guid` is the model's GUID.
+    pub fn new(name: &str, guid: &str, model: Box<dyn Model>, log: LogSink, debug_logging: bool) -> Result<Self, InstantiateError> {
+        if name.is_empty() {
+            return Err(InstantiateError::EmptyName);
+        }
+        let expected = model.description().guid();
+        if guid != expected {
+            return Err(InstantiateError::WrongGuid { given: guid.to_owned(), expected });
+        }
+        let description = model.description();
+        let mut lookup: [Vec<Option<usize>>; 4] = Default::default();
+        for (i, v) in description.variables.iter().enumerate() {
+            let slot = &mut lookup[v.base_type().slot()];
+            let vr = v.value_reference as usize;
+            if slot.len() <= vr {
+                slot.resize(vr + 1, None);
+            }
+            slot[vr] = Some(i);
+        }
+        let values = Values::start(description);
+        Ok(Self {
+            name: name.to_owned(),
+            guid: expected,
+            start_values: values.clone(),
+            values,
+            model,
+            phase: Phase::Instantiated,
+            start_time: 0.0,
+            time: 0.0,
+            dirty: true,
+            log,
+            debug_logging,
+            categories: LOG_CATEGORIES.iter().map(|_| debug_logging).collect(),
+            lookup,
+        })
+    }
+
+    /// The instance name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The current phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The current communication point [s].
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Logs an error and returns `Error`.
+    pub fn error(&self, message: &str) -> Status {
+        (self.log)(Status::Error, "logStatusError", message);
+        Status::Error
+    }
+
+    /// Logs a call trace if `logCalls` is on.
+    pub fn trace(&self, message: impl FnOnce() -> String) {
+        if self.debug_logging && self.categories[2] {
+            (self.log)(Status::Ok, "logCalls", &message());
+        }
+    }
+
+    /// After a caught panic: only freeing is possible.
+    pub fn set_fatal(&mut self) {
+        self.phase = Phase::Fatal;
+    }
+
+    /// Checks that `function` (named `name` in messages) may be called now.
+    pub fn check_phase(&self, name: &str, function: Function) -> Result<(), Status> {
+        if function.allowed() & self.phase as u16 != 0 {
+            Ok(())
+        } else {
+            Err(self.error(&format!("{name}: illegal call sequence: not allowed in state {:?}", self.phase)))
+        }
+    }
+
+    /// `fmi2SetDebugLogging`.
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Status {
+        if let Err(s) = self.check_phase("fmi2SetDebugLogging", Function::SetDebugLogging) {
+            return s;
+        }
+        let mut chosen = vec![categories.is_empty(); LOG_CATEGORIES.len()];
+        for c in categories {
+            match LOG_CATEGORIES.iter().position(|x| x.name == *c) {
+                Some(i) => chosen[i] = true,
+                None => {
+                    let known: Vec<&str> = LOG_CATEGORIES.iter().map(|x| x.name).collect();
+                    return self.error(&format!("fmi2SetDebugLogging: unknown log category '{c}' (known: {})", known.join(", ")));
+                }
+            }
+        }
+        self.debug_logging = on;
+        for (enabled, chosen) in self.categories.iter_mut().zip(chosen) {
+            if chosen {
+                *enabled = on;
+            }
+        }
+        Status::Ok
+    }
+
+    /// `fmi2SetupExperiment`.
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start_time: f64, stop_time: Option<f64>) -> Status {
+        if let Err(s) = self.check_phase("fmi2SetupExperiment", Function::SetupExperiment) {
+            return s;
+        }
+        if !start_time.is_finite() {
+            return self.error(&format!("fmi2SetupExperiment: start time {start_time} is not finite"));
+        }
+        if let Some(stop) = stop_time {
+            if !(stop >= start_time) {
+                return self.error(&format!("fmi2SetupExperiment: stop time {stop} is before start time {start_time}"));
+            }
+        }
+        if let Some(t) = tolerance {
+            self.trace(|| format!("fmi2SetupExperiment: tolerance {t} ignored (fixed-step model)"));
+        }
+        self.start_time = start_time;
+        self.time = start_time;
+        Status::Ok
+    }
+
+    /// `fmi2EnterInitializationMode`.
+    pub fn enter_initialization_mode(&mut self) -> Status {
+        if let Err(s) = self.check_phase("fmi2EnterInitializationMode", Function::EnterInitializationMode) {
+            return s;
+        }
+        self.phase = Phase::InitializationMode;
+        Status::Ok
+    }
+
+    /// `fmi2ExitInitializationMode`: the model reads its parameters and computes its outputs.
+    pub fn exit_initialization_mode(&mut self) -> Status {
+        if let Err(s) = self.check_phase("fmi2ExitInitializationMode", Function::ExitInitializationMode) {
+            return s;
+        }
+        match self.model.initialize(&mut self.values, self.start_time) {
+            Ok(()) => {
+                self.dirty = false;
+                self.time = self.start_time;
+                self.phase = Phase::StepComplete;
+                Status::Ok
+            }
+            Err(e) => {
+                self.phase = Phase::Error;
+                self.error(&format!("fmi2ExitInitializationMode: {e}"))
+            }
+        }
+    }
+
+    /// `fmi2Terminate`.
+    pub fn terminate(&mut self) -> Status {
+        if let Err(s) = self.check_phase("fmi2Terminate", Function::Terminate) {
+            return s;
+        }
+        self.phase = Phase::Terminated;
+        Status::Ok
+    }
+
+    /// `fmi2Reset`: start values back, the model as after instantiation.
+    pub fn reset(&mut self) -> Status {
+        if let Err(s) = self.check_phase("fmi2Reset", Function::Reset) {
+            return s;
+        }
+        self.model.reset();
+        self.values = self.start_values.clone();
+        self.phase = Phase::Instantiated;
+        self.start_time = 0.0;
+        self.time = 0.0;
+        self.dirty = true;
+        Status::Ok
+    }
+
+    fn index_of(&self, base: BaseType, vr: u32) -> Option<usize> {
+        self.lookup[base.slot()].get(vr as usize).copied().flatten()
+    }
+
+    fn resolve(&self, function: &str, vr: u32, base: BaseType) -> Result<usize, Status> {
+        match self.index_of(base, vr) {
+            Some(i) => Ok(i),
+            None => {
+                let other = [BaseType::Real, BaseType::Integer, BaseType::Boolean, BaseType::String]
+                    .into_iter()
+                    .find(|&t| self.index_of(t, vr).is_some())
+                    .map(BaseType::name);
+                Err(self.error(&match other {
+                    Some(t) => format!("{function}: value reference {vr} is a {t} variable, not {}", base.name()),
+                    None => format!("{function}: unknown value reference {vr}"),
+                }))
+            }
+        }
+    }
+
+    fn refresh(&mut self, function: &str) -> Result<(), Status> {
+        if self.dirty && self.phase != Phase::Instantiated {
+            // In initialization mode the outputs are initial unknowns: computed by the same
+            // initialisation that leaving the mode runs, from the values set so far.
+            let computed = if self.phase == Phase::InitializationMode {
+                self.model.initialize(&mut self.values, self.start_time)
+            } else {
+                self.model.update_outputs(&mut self.values, self.time)
+            };
+            if let Err(e) = computed {
+                return Err(self.error(&format!("{function}: {e}")));
+            }
+            self.dirty = false;
+        }
+        Ok(())
+    }
+
+    /// Reads variables of base type `base` through `read`, after the phase and reference checks.
+    fn get<T>(&mut self, function: &str, base: BaseType, vrs: &[u32], out: &mut [T], read: impl Fn(&Values, usize) -> T) -> Status {
+        if let Err(s) = self.check_phase(function, Function::GetValues) {
+            return s;
+        }
+        if let Err(s) = self.refresh(function) {
+            return s;
+        }
+        for &vr in vrs {
+            if let Err(s) = self.resolve(function, vr, base) {
+                return s;
+            }
+        }
+        for (o, &vr) in out.iter_mut().zip(vrs) {
+            *o = read(&self.values, vr as usize);
+        }
+        Status::Ok
+    }
+
+    /// `fmi2GetReal`.
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
+        self.get("fmi2GetReal", BaseType::Real, vrs, out, |v, i| v.reals[i])
+    }
+    /// `fmi2GetInteger`.
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
+        self.get("fmi2GetInteger", BaseType::Integer, vrs, out, |v, i| v.integers[i])
+    }
+    /// `fmi2GetBoolean`.
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [bool]) -> Status {
+        self.get("fmi2GetBoolean", BaseType::Boolean, vrs, out, |v, i| v.booleans[i])
+    }
+    /// `fmi2GetString`.
+    pub fn get_string(&mut self, vrs: &[u32], out: &mut [String]) -> Status {
+        self.get("fmi2GetString", BaseType::String, vrs, out, |v, i| v.strings[i].clone())
+    }
+
+    /// Checks that every reference may be set now; sets nothing.
+    fn check_settable(&self, function: &str, base: BaseType, vrs: &[u32]) -> Result<(), Status> {
+        let which = if base == BaseType::Real { Function::SetReal } else { Function::SetOther };
+        self.check_phase(function, which)?;
+        let phase = match self.phase {
+            Phase::Instantiated => SetPhase::Instantiated,
+            Phase::InitializationMode => SetPhase::Initialization,
+            _ => SetPhase::Running,
+        };
+        let variables = &self.model.description().variables;
+        for &vr in vrs {
+            let var = &variables[self.resolve(function, vr, base)?];
+            if !var.settable_in(phase) {
+                return Err(self.error(&format!(
+                    "{function}: '{}' ({:?}, {:?}) cannot be set in state {:?}",
+                    var.name, var.causality, var.variability, self.phase
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// `fmi2SetReal`: all values are checked (settable now, finite) before any is set.
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        if let Err(s) = self.check_settable("fmi2SetReal", BaseType::Real, vrs) {
+            return s;
+        }
+        if let Some((vr, v)) = vrs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
+            let index = self.index_of(BaseType::Real, *vr).expect("checked above");
+            let name = &self.model.description().variables[index].name;
+            return self.error(&format!("fmi2SetReal: {v} for '{name}' is not a finite number; nothing was set"));
+        }
+        for (&vr, &v) in vrs.iter().zip(values) {
+            self.values.reals[vr as usize] = v;
+        }
+        self.dirty = true;
+        Status::Ok
+    }
+
+    /// Sets variables of a non-real base type after the checks; `slot` picks the storage.
+    fn set<T: Clone>(&mut self, function: &str, base: BaseType, vrs: &[u32], values: &[T], slot: fn(&mut Values) -> &mut Vec<T>) -> Status {
+        if let Err(s) = self.check_settable(function, base, vrs) {
+            return s;
+        }
+        let storage = slot(&mut self.values);
+        for (&vr, v) in vrs.iter().zip(values) {
+            storage[vr as usize].clone_from(v);
+        }
+        self.dirty = true;
+        Status::Ok
+    }
+
+    /// `fmi2SetInteger`.
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        self.set("fmi2SetInteger", BaseType::Integer, vrs, values, |v| &mut v.integers)
+    }
+
+    /// `fmi2SetBoolean`.
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
+        self.set("fmi2SetBoolean", BaseType::Boolean, vrs, values, |v| &mut v.booleans)
+    }
+
+    /// `fmi2SetString`.
+    pub fn set_string(&mut self, vrs: &[u32], values: &[String]) -> Status {
+        self.set("fmi2SetString", BaseType::String, vrs, values, |v| &mut v.strings)
+    }
+
+    /// `fmi2DoStep` from `current` [s] by `step` [s].
+    pub fn do_step(&mut self, current: f64, step: f64) -> Status {
+        if let Err(s) = self.check_phase("fmi2DoStep", Function::DoStep) {
+            return s;
+        }
+        if !(step.is_finite() && step > 0.0) {
+            return self.error(&format!("fmi2DoStep: communication step size {step} must be finite and > 0"));
+        }
+        let tolerance = 1e-9 * self.time.abs().max(1.0);
+        if !current.is_finite() || (current - self.time).abs() > tolerance {
+            return self.error(&format!(
+                "fmi2DoStep: currentCommunicationPoint {current} differs from the FMU's time {}",
+                self.time
+            ));
+        }
+        match self.model.do_step(&mut self.values, current, step) {
+            Ok(()) => {
+                self.time = current + step;
+                self.dirty = false;
+                Status::Ok
+            }
+            Err(e) => {
+                self.phase = Phase::Error;
+                self.error(&format!("fmi2DoStep at t = {current} s: {e}"))
+            }
+        }
+    }
+
+    /// `fmi2GetRealStatus(fmi2LastSuccessfulTime)` [s].
+    pub fn last_successful_time(&self) -> Result<f64, Status> {
+        self.check_phase("fmi2GetRealStatus", Function::GetStatus)?;
+        Ok(self.time)
+    }
+
+    /// `fmi2GetBooleanStatus(fmi2Terminated)`: this FMU never asks to stop.
+    pub fn terminated_status(&self) -> Result<bool, Status> {
+        self.check_phase("fmi2GetBooleanStatus", Function::GetStatus)?;
+        Ok(false)
+    }
+
+    /// `fmi2GetFMUstate`.
+    pub fn get_state(&self) -> Result<Snapshot, Status> {
+        self.check_phase("fmi2GetFMUstate", Function::FmuState)?;
+        let mut model = Vec::new();
+        self.model.save_state(&mut model);
+        Ok(Snapshot { phase: self.phase, time: self.time, start_time: self.start_time, values: self.values.clone(), model })
+    }
+
+    /// `fmi2SetFMUstate`.
+    pub fn set_state(&mut self, snapshot: &Snapshot) -> Status {
+        if let Err(s) = self.check_phase("fmi2SetFMUstate", Function::FmuState) {
+            return s;
+        }
+        if let Err(e) = self.model.load_state(&snapshot.values, &snapshot.model) {
+            return self.error(&format!("fmi2SetFMUstate: {e}"));
+        }
+        self.values = snapshot.values.clone();
+        self.phase = snapshot.phase;
+        self.time = snapshot.time;
+        self.start_time = snapshot.start_time;
+        self.dirty = false;
+        Status::Ok
+    }
+
+    /// `fmi2SerializeFMUstate`: magic, version, GUID, payload, CRC-32.
+    pub fn serialize(&self, snapshot: &Snapshot) -> Result<Vec<u8>, Status> {
+        self.check_phase("fmi2SerializeFMUstate", Function::FmuState)?;
+        let mut out = Vec::new();
+        out.extend_from_slice(STATE_MAGIC);
+        out.put_u32(STATE_VERSION);
+        out.put_bytes(self.guid.as_bytes());
+        let mut p = Vec::new();
+        p.put_u8((snapshot.phase as u16).trailing_zeros() as u8);
+        p.put_f64(snapshot.time);
+        p.put_f64(snapshot.start_time);
+        p.put_f64s(&snapshot.values.reals);
+        p.put_u32(snapshot.values.integers.len() as u32);
+        for &i in &snapshot.values.integers {
+            p.put_u32(i as u32);
+        }
+        p.put_u32(snapshot.values.booleans.len() as u32);
+        for &b in &snapshot.values.booleans {
+            p.put_u8(b as u8);
+        }
+        p.put_u32(snapshot.values.strings.len() as u32);
+        for s in &snapshot.values.strings {
+            p.put_bytes(s.as_bytes());
+        }
+        p.put_bytes(&snapshot.model);
+        out.put_u64(p.len() as u64);
+        out.extend_from_slice(&p);
+        let crc = crc32fast::hash(&out);
+        out.put_u32(crc);
+        Ok(out)
+    }
+
+    /// `fmi2DeSerializeFMUstate`: rejects a buffer that is truncated, altered, of another
+    /// format version or of another model.
+    pub fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot, Status> {
+        self.check_phase("fmi2DeSerializeFMUstate", Function::FmuState)?;
+        self.decode(bytes).map_err(|e| self.error(&format!("fmi2DeSerializeFMUstate: {e}")))
+    }
+
+    fn decode(&self, bytes: &[u8]) -> Result<Snapshot, StateError> {
+        let invalid = |m: String| StateError::Invalid(m);
+        if bytes.len() < STATE_MAGIC.len() + 4 || &bytes[..8] != STATE_MAGIC {
+            return Err(invalid("not an FMU state of this FMU's kind (bad magic bytes)".into()));
+        }
+        let (body, crc) = bytes.split_at(bytes.len() - 4);
+        if crc32fast::hash(body).to_le_bytes() != crc {
+            return Err(invalid("checksum mismatch: the state is truncated or altered".into()));
+        }
+        let mut r = Reader::new(&body[8..]);
+        let version = r.u32()?;
+        if version != STATE_VERSION {
+            return Err(invalid(format!("state format version {version}, this FMU reads version {STATE_VERSION}")));
+        }
+        let guid = r.bytes()?;
+        if guid != self.guid.as_bytes() {
+            return Err(invalid(format!("the state belongs to another model (GUID {})", String::from_utf8_lossy(guid))));
+        }
+        let len = r.u64()?;
+        let payload = r.take(usize::try_from(len).map_err(|_| invalid("payload length too large".into()))?)?;
+        r.finish()?;
+        let mut p = Reader::new(payload);
+        let phase = phase_from(p.u8()?)?;
+        let time = p.f64()?;
+        let start_time = p.f64()?;
+        let shape = &self.start_values;
+        let reals = p.f64s(shape.reals.len())?;
+        let n = p.count("integers", shape.integers.len())?;
+        let integers = (0..n).map(|_| p.u32().map(|v| v as i32)).collect::<Result<_, _>>()?;
+        let n = p.count("booleans", shape.booleans.len())?;
+        let booleans = (0..n)
+            .map(|_| match p.u8()? {
+                0 => Ok(false),
+                1 => Ok(true),
+                b => Err(invalid(format!("invalid Boolean byte {b}"))),
+            })
+            .collect::<Result<_, _>>()?;
+        let n = p.count("strings", shape.strings.len())?;
+        let strings = (0..n)
+            .map(|_| String::from_utf8(p.bytes()?.to_vec()).map_err(|_| invalid("a string is not UTF-8".into())))
+            .collect::<Result<_, _>>()?;
+        let model = p.bytes()?.to_vec();
+        p.finish()?;
+        if phase == Phase::Fatal {
+            return Err(invalid("a state saved in the fatal state cannot be restored".into()));
+        }
+        Ok(Snapshot { phase, time, start_time, values: Values { reals, integers, booleans, strings }, model })
+    }
+
+    /// The model's description.
+    pub fn description(&self) -> &ModelDescription {
+        self.model.description()
+    }
+}

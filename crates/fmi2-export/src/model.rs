@@ -1,0 +1,180 @@
+//! The small trait a model implements to become an FMU, the value store the layer keeps for
+//! it, and the error a model reports.
+
+use std::fmt;
+use std::ops::{Index, IndexMut};
+
+use crate::description::{Kind, ModelDescription};
+use crate::table::{BooleanVar, IntegerVar, RealVar, StringVar};
+
+/// The current value of every variable, one vector per base type indexed by value reference.
+/// A model reads and writes it through the handles its [`TableBuilder`](crate::TableBuilder)
+/// gave: `values[handle]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Values {
+    pub(crate) reals: Vec<f64>,
+    pub(crate) integers: Vec<i32>,
+    pub(crate) booleans: Vec<bool>,
+    pub(crate) strings: Vec<String>,
+}
+
+impl Values {
+    /// The start values of `description` (0, false or "" where a variable has none).
+    pub fn start(description: &ModelDescription) -> Self {
+        let mut v = Values { reals: Vec::new(), integers: Vec::new(), booleans: Vec::new(), strings: Vec::new() };
+        fn put<T: Clone + Default>(slot: &mut Vec<T>, vr: u32, value: T) {
+            let i = vr as usize;
+            if slot.len() <= i {
+                slot.resize(i + 1, T::default());
+            }
+            slot[i] = value;
+        }
+        for var in &description.variables {
+            let vr = var.value_reference;
+            match &var.kind {
+                Kind::Real { start, .. } => put(&mut v.reals, vr, start.unwrap_or(0.0)),
+                Kind::Integer { start } => put(&mut v.integers, vr, start.unwrap_or(0)),
+                Kind::Boolean { start } => put(&mut v.booleans, vr, start.unwrap_or(false)),
+                Kind::String { start } => put(&mut v.strings, vr, start.clone().unwrap_or_default()),
+            }
+        }
+        v
+    }
+
+    /// Copies the values of `vars` into `out` (as many as both hold).
+    pub fn read_reals(&self, vars: &[RealVar], out: &mut [f64]) {
+        for (o, v) in out.iter_mut().zip(vars) {
+            *o = self[*v];
+        }
+    }
+
+    /// Sets `vars` to `values` (as many as both hold).
+    pub fn write_reals(&mut self, vars: &[RealVar], values: &[f64]) {
+        for (v, x) in vars.iter().zip(values) {
+            self[*v] = *x;
+        }
+    }
+}
+
+macro_rules! index {
+    ($handle:ty, $field:ident, $t:ty) => {
+        impl Index<$handle> for Values {
+            type Output = $t;
+            fn index(&self, var: $handle) -> &$t {
+                &self.$field[var.0 as usize]
+            }
+        }
+        impl IndexMut<$handle> for Values {
+            fn index_mut(&mut self, var: $handle) -> &mut $t {
+                &mut self.$field[var.0 as usize]
+            }
+        }
+    };
+}
+
+index!(RealVar, reals, f64);
+index!(IntegerVar, integers, i32);
+index!(BooleanVar, booleans, bool);
+index!(StringVar, strings, String);
+
+/// Why a model call failed. The layer logs it and returns `fmi2Error`. Any error type
+/// converts into it with `?`; [`ModelError::msg`] makes one from text.
+pub struct ModelError(Box<dyn std::error::Error + Send + Sync + 'static>);
+
+impl ModelError {
+    /// An error that is just a message.
+    pub fn msg(message: impl fmt::Display) -> Self {
+        Self(message.to_string().into())
+    }
+
+    /// The underlying error.
+    pub fn inner(&self) -> &(dyn std::error::Error + Send + Sync + 'static) {
+        &*self.0
+    }
+}
+
+impl<E: std::error::Error + Send + Sync + 'static> From<E> for ModelError {
+    fn from(e: E) -> Self {
+        Self(Box::new(e))
+    }
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl fmt::Debug for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(&self.0, f)
+    }
+}
+
+/// A model behind an FMU. The layer owns the [`Values`]: it writes inputs and parameters into
+/// them, checked, and reads outputs from them; the model reads and writes them in its calls.
+/// Errors are logged by the layer and turned into `fmi2Error`.
+pub trait Model: Send {
+    /// The model's interface, fixed for the life of the instance.
+    fn description(&self) -> &ModelDescription;
+
+    /// Leaves initialization mode: read parameters and inputs from `values`, set up the
+    /// internal state at `start_time` [s] and write the initial outputs.
+    fn initialize(&mut self, values: &mut Values, start_time: f64) -> Result<(), ModelError>;
+
+    /// Recomputes outputs that depend directly on inputs, after inputs changed at the
+    /// communication point `time` [s]. The default does nothing (no direct feedthrough).
+    fn update_outputs(&mut self, _values: &mut Values, _time: f64) -> Result<(), ModelError> {
+        Ok(())
+    }
+
+    /// Advances from `time` by `step` [s] with the inputs in `values`, writing the outputs.
+    fn do_step(&mut self, values: &mut Values, time: f64, step: f64) -> Result<(), ModelError>;
+
+    /// Back to the state right after instantiation (the layer restores the start values).
+    fn reset(&mut self);
+
+    /// Appends the internal state not held in [`Values`] to `out`.
+    fn save_state(&self, out: &mut Vec<u8>);
+
+    /// Restores a state written by [`Model::save_state`], with `values` already restored.
+    /// Must reject malformed bytes without changing anything.
+    fn load_state(&mut self, values: &Values, bytes: &[u8]) -> Result<(), ModelError>;
+}
+
+/// A model without state of its own: its outputs are a function of its inputs, its
+/// parameters and the time, so initialising, stepping and updating all just compute them,
+/// and there is nothing to save (the layer keeps the time in its FMU state). Every
+/// `StaticModel` is a [`Model`].
+pub trait StaticModel: Send {
+    /// The model's interface, fixed for the life of the instance.
+    fn description(&self) -> &ModelDescription;
+
+    /// Writes the outputs at the communication point `time` [s] from the inputs and
+    /// parameters in `values`.
+    fn compute(&mut self, values: &mut Values, time: f64) -> Result<(), ModelError>;
+}
+
+impl<T: StaticModel> Model for T {
+    fn description(&self) -> &ModelDescription {
+        StaticModel::description(self)
+    }
+    fn initialize(&mut self, values: &mut Values, start_time: f64) -> Result<(), ModelError> {
+        self.compute(values, start_time)
+    }
+    fn update_outputs(&mut self, values: &mut Values, time: f64) -> Result<(), ModelError> {
+        self.compute(values, time)
+    }
+    fn do_step(&mut self, values: &mut Values, time: f64, step: f64) -> Result<(), ModelError> {
+        self.compute(values, time + step)
+    }
+    fn reset(&mut self) {}
+    fn save_state(&self, _out: &mut Vec<u8>) {}
+    fn load_state(&mut self, _values: &Values, bytes: &[u8]) -> Result<(), ModelError> {
+        Ok(crate::codec::Reader::new(bytes).finish()?)
+    }
+}
+
+/// Makes a model from the FMU's `resources/` folder. The layer checks the GUID the host
+/// passes against the returned model's description.
+pub type ModelFactory = fn(resources: &std::path::Path) -> Result<Box<dyn Model>, ModelError>;

@@ -1,0 +1,82 @@
+//! No panic crosses the C ABI: a model that panics gives fmi2Fatal (and a log entry), after
+//! which the instance only refuses, and a factory that panics gives NULL.
+
+use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::path::Path;
+use std::sync::Mutex;
+
+use fmi2_export::abi::{self, CallbackFunctions, Logger};
+use fmi2_export::{DefaultExperiment, Model, ModelDescription, ModelError, TableBuilder, Values};
+
+struct Bomb(ModelDescription);
+
+fn description() -> ModelDescription {
+    let mut b = TableBuilder::new();
+    let u = b.input("u", None, 0.0, "input");
+    b.output("y", None, "output", &[u]);
+    ModelDescription::new("Bomb", "panics in fmi2DoStep", b.finish())
+        .unwrap()
+        .with_default_experiment(DefaultExperiment { start_time: 0.0, stop_time: 1.0, step_size: 0.1 })
+}
+
+impl Model for Bomb {
+    fn description(&self) -> &ModelDescription {
+        &self.0
+    }
+    fn initialize(&mut self, _: &mut Values, _: f64) -> Result<(), ModelError> {
+        Ok(())
+    }
+    fn do_step(&mut self, _: &mut Values, _: f64, _: f64) -> Result<(), ModelError> {
+        panic!("boom in do_step")
+    }
+    fn reset(&mut self) {}
+    fn save_state(&self, _: &mut Vec<u8>) {}
+    fn load_state(&mut self, _: &Values, _: &[u8]) -> Result<(), ModelError> {
+        Ok(())
+    }
+}
+
+fn bomb(_: &Path) -> Result<Box<dyn Model>, ModelError> {
+    Ok(Box::new(Bomb(description())))
+}
+
+fn exploding_factory(_: &Path) -> Result<Box<dyn Model>, ModelError> {
+    panic!("factory exploded")
+}
+
+static LOG: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+unsafe extern "C" fn capture(_: *mut c_void, _: *const c_char, _: c_int, _: *const c_char, message: *const c_char) {
+    LOG.lock().unwrap().push(unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned());
+}
+
+#[test]
+fn panics_become_fatal_and_never_unwind_into_the_host() {
+    // SAFETY: a non-variadic logger receives the same first five arguments on this ABI,
+    // as ctypes-based hosts such as fmpy rely on.
+    let logger: Logger = unsafe { std::mem::transmute(capture as unsafe extern "C" fn(_, _, _, _, _)) };
+    let callbacks = CallbackFunctions { logger: Some(logger), allocate_memory: None, free_memory: None, step_finished: None, component_environment: std::ptr::null_mut() };
+    let dir = tempfile::tempdir().unwrap();
+    let uri = CString::new(format!("file://{}", dir.path().display())).unwrap();
+    let guid = CString::new(description().guid()).unwrap();
+    let name = CString::new("bomb").unwrap();
+    unsafe {
+        let c = abi::instantiate(bomb, name.as_ptr(), 1, guid.as_ptr(), uri.as_ptr(), &callbacks, 0, 0);
+        assert!(!c.is_null());
+        assert_eq!(abi::setup_experiment(c, 0, 0.0, 0.0, 0, 0.0), 0);
+        assert_eq!(abi::enter_initialization_mode(c), 0);
+        assert_eq!(abi::exit_initialization_mode(c), 0);
+        assert_eq!(abi::do_step(c, 0.0, 0.1, 1), 4, "fmi2Fatal");
+        assert!(LOG.lock().unwrap().iter().any(|m| m.contains("fmi2DoStep: internal error (boom in do_step)")));
+        // Afterwards every call is refused with fmi2Fatal; freeing still works.
+        assert_eq!(abi::do_step(c, 0.0, 0.1, 1), 4);
+        assert_eq!(abi::reset(c), 4);
+        let mut y = 0.0;
+        assert_eq!(abi::get_real(c, [1u32].as_ptr(), 1, &mut y), 4);
+        abi::free_instance(c);
+
+        let c = abi::instantiate(exploding_factory, name.as_ptr(), 1, guid.as_ptr(), uri.as_ptr(), &callbacks, 0, 0);
+        assert!(c.is_null());
+        assert!(LOG.lock().unwrap().iter().any(|m| m.contains("fmi2Instantiate: internal error (factory exploded)")));
+    }
+}

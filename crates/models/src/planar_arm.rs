@@ -1,0 +1,417 @@
+//! The `PlanarArm` FMU: the arm of [`neurarm_physics::arm`] behind the FMI layer.
+//!
+//! Inputs: joint torques `tau_i` [N·m]. Outputs: joint angles `q_i` [rad] and velocities
+//! `qd_i` [rad/s], end-effector position `x`, `y` [m] and velocity `xd`, `yd` [m/s], and the
+//! measured angles and velocities `q_meas_i`, `qd_meas_i` (equal to the true ones unless
+//! hardware-like effects are on). Parameters: every field of [`ArmConfig`], one table below
+//! ([`JOINT_PARAMETERS`], [`ARM_PARAMETERS`]), plus the initial state `q0_i`, `qd0_i`.
+
+use std::path::Path;
+
+use fmi2_export::codec::{Put, Reader, StateError};
+use fmi2_export::{Causality, IntegerVar, Model, ModelDescription, ModelError, RealVar, TableBuilder, Unit, Values, Variability};
+use neurarm_physics::arm::{end_effector_state, ArmSimulator, ArmState, FrictionBranch, ParamError, Sensors, StepError};
+use neurarm_physics::config::ArmConfig;
+use serde::{Deserialize, Serialize};
+
+use crate::units::*;
+use crate::{describe, BuildError, ModelKind};
+
+/// Spec of a planar arm.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanarArmSpec {
+    /// The arm's configuration: the parameters' start values.
+    pub config: ArmConfig,
+    /// Initial joint angles [rad].
+    pub q0: Vec<f64>,
+    /// Initial joint velocities [rad/s].
+    pub qd0: Vec<f64>,
+}
+
+impl ModelKind for PlanarArmSpec {
+    fn build(&self, identifier: &str, _resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
+        let initial = ArmState { q: self.q0.clone(), qd: self.qd0.clone() };
+        Ok(Box::new(PlanarArmModel::new(identifier, self.config.clone(), initial)?))
+    }
+
+    fn equations_html(&self) -> &'static str {
+        EQUATIONS_HTML
+    }
+}
+
+/// Why the arm cannot start or go on.
+#[derive(Debug, thiserror::Error)]
+pub enum ArmError {
+    /// A parameter set through the FMU is out of range.
+    #[error("invalid parameter: {0} (FMU names: length_i, mass_i, coulomb_pos_i, …; i from 1)")]
+    Parameter(ParamError),
+    /// The noise seed is negative.
+    #[error("noise_seed = {0} must be >= 0")]
+    NegativeSeed(i32),
+    /// The initial state is not finite.
+    #[error("initial state entry {index} = {value} is not finite")]
+    InitialState {
+        /// Position in q then qd.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// The integrator refused the step.
+    #[error(transparent)]
+    Step(#[from] StepError),
+    /// The state left the finite numbers.
+    #[error("the state became {0}: the torques or parameters drive the arm beyond what the integrator can follow")]
+    Diverged(f64),
+    /// A step before initialization.
+    #[error("the arm is not initialized")]
+    NotInitialized,
+    /// A saved state with a bad flag.
+    #[error(transparent)]
+    State(#[from] StateError),
+}
+
+/// A real parameter of one joint: FMU name prefix (the variable is `{name}_{i}`), unit,
+/// description, and how it maps to and from the configuration.
+pub struct JointParameter {
+    /// Name prefix.
+    pub name: &'static str,
+    /// Unit, if any.
+    pub unit: Option<Unit>,
+    /// Description; `{}` is replaced by the joint number.
+    pub description: &'static str,
+    get: fn(&ArmConfig, usize) -> f64,
+    set: fn(&mut ArmConfig, usize, f64),
+}
+
+/// A real parameter of the whole arm.
+pub struct ArmParameter {
+    /// Name.
+    pub name: &'static str,
+    /// Unit, if any.
+    pub unit: Option<Unit>,
+    /// Description.
+    pub description: &'static str,
+    get: fn(&ArmConfig) -> f64,
+    set: fn(&mut ArmConfig, f64),
+}
+
+fn branch(c: &mut ArmConfig, i: usize, positive: bool) -> &mut FrictionBranch {
+    let f = &mut c.arm.friction[i];
+    if positive {
+        &mut f.positive
+    } else {
+        &mut f.negative
+    }
+}
+
+fn branch_ref(c: &ArmConfig, i: usize, positive: bool) -> &FrictionBranch {
+    let f = &c.arm.friction[i];
+    if positive {
+        &f.positive
+    } else {
+        &f.negative
+    }
+}
+
+/// A per-joint optional list where 0 means "off" for that joint (torque limit, encoder).
+fn optional_entry(list: &Option<Vec<f64>>, i: usize) -> f64 {
+    list.as_ref().map_or(0.0, |l| l[i])
+}
+
+fn set_optional_entry(list: &mut Option<Vec<f64>>, n: usize, i: usize, v: f64) {
+    let l = list.get_or_insert_with(|| vec![0.0; n]);
+    l[i] = v;
+    if l.iter().all(|&x| x == 0.0) {
+        *list = None;
+    }
+}
+
+/// A friction parameter: one field of one direction's branch.
+macro_rules! friction {
+    ($name:literal, $unit:expr, $desc:literal, $positive:expr, $field:ident) => {
+        JointParameter {
+            name: $name,
+            unit: Some($unit),
+            description: $desc,
+            get: |c, i| branch_ref(c, i, $positive).$field,
+            set: |c, i, v| branch(c, i, $positive).$field = v,
+        }
+    };
+}
+
+/// The viscous fall-off of one direction: 0 in the FMU stands for "linear" (`None`).
+macro_rules! falloff {
+    ($name:literal, $desc:literal, $positive:expr) => {
+        JointParameter {
+            name: $name,
+            unit: Some(RADIAN_PER_SECOND),
+            description: $desc,
+            get: |c, i| branch_ref(c, i, $positive).viscous_falloff_rad_s.unwrap_or(0.0),
+            set: |c, i, v| branch(c, i, $positive).viscous_falloff_rad_s = (v != 0.0).then_some(v),
+        }
+    };
+}
+
+/// A per-joint entry of an optional hardware list, 0 standing for "off" for that joint.
+macro_rules! hardware_entry {
+    ($name:literal, $unit:expr, $desc:literal, $field:ident) => {
+        JointParameter {
+            name: $name,
+            unit: $unit,
+            description: $desc,
+            get: |c, i| optional_entry(&c.hardware.$field, i),
+            set: |c, i, v| {
+                let n = c.arm.links.len();
+                set_optional_entry(&mut c.hardware.$field, n, i, v)
+            },
+        }
+    };
+}
+
+/// Parameters of each joint, in table order; the FMU variable of joint i is `{name}_{i}`.
+pub const JOINT_PARAMETERS: [JointParameter; 16] = [
+    JointParameter { name: "length", unit: Some(METRE), description: "Length of link {}", get: |c, i| c.arm.links[i].length_m, set: |c, i, v| c.arm.links[i].length_m = v },
+    JointParameter { name: "mass", unit: Some(KILOGRAM), description: "Mass of link {}", get: |c, i| c.arm.links[i].mass_kg, set: |c, i, v| c.arm.links[i].mass_kg = v },
+    JointParameter {
+        name: "com",
+        unit: Some(METRE),
+        description: "Distance from joint {} to the centre of mass of its link",
+        get: |c, i| c.arm.links[i].com_m,
+        set: |c, i, v| c.arm.links[i].com_m = v,
+    },
+    JointParameter {
+        name: "inertia",
+        unit: Some(KILOGRAM_METRE_SQUARED),
+        description: "Moment of inertia of link {} about its centre of mass",
+        get: |c, i| c.arm.links[i].inertia_kgm2,
+        set: |c, i, v| c.arm.links[i].inertia_kgm2 = v,
+    },
+    friction!("coulomb_pos", NEWTON_METRE, "Coulomb friction of joint {}, positive velocity", true, coulomb_nm),
+    friction!("static_pos", NEWTON_METRE, "Static (breakaway) friction of joint {}, positive velocity", true, static_nm),
+    friction!("stribeck_velocity_pos", RADIAN_PER_SECOND, "Stribeck velocity of joint {}, positive velocity", true, stribeck_velocity_rad_s),
+    friction!("viscous_pos", NEWTON_METRE_SECOND_PER_RADIAN, "Viscous friction coefficient of joint {} at low speed, positive velocity", true, viscous_nms_rad),
+    falloff!("viscous_falloff_pos", "Speed at which the viscous slope of joint {} has halved, positive velocity (0: linear)", true),
+    friction!("coulomb_neg", NEWTON_METRE, "Coulomb friction of joint {}, negative velocity (magnitude)", false, coulomb_nm),
+    friction!("static_neg", NEWTON_METRE, "Static (breakaway) friction of joint {}, negative velocity (magnitude)", false, static_nm),
+    friction!("stribeck_velocity_neg", RADIAN_PER_SECOND, "Stribeck velocity of joint {}, negative velocity", false, stribeck_velocity_rad_s),
+    friction!("viscous_neg", NEWTON_METRE_SECOND_PER_RADIAN, "Viscous friction coefficient of joint {} at low speed, negative velocity", false, viscous_nms_rad),
+    falloff!("viscous_falloff_neg", "Speed at which the viscous slope of joint {} has halved, negative velocity (0: linear)", false),
+    hardware_entry!("torque_limit", Some(NEWTON_METRE), "Largest torque motor {} can apply (0: no limit)", torque_limit_nm),
+    hardware_entry!("encoder_counts", None, "Encoder counts per revolution of joint {} (0: exact angles)", encoder_counts_per_rev),
+];
+
+/// Parameters of the whole arm, in table order.
+pub const ARM_PARAMETERS: [ArmParameter; 5] = [
+    ArmParameter { name: "gravity", unit: Some(METRE_PER_SECOND_SQUARED), description: "Magnitude of gravitational acceleration", get: |c| c.arm.gravity_m_s2, set: |c, v| c.arm.gravity_m_s2 = v },
+    ArmParameter {
+        name: "base_angle",
+        unit: Some(RADIAN),
+        description: "Tilt of the arm's plane: 0 horizontal (no gravity torque), pi/2 vertical (gravity along -y)",
+        get: |c| c.arm.base_angle_rad,
+        set: |c, v| c.arm.base_angle_rad = v,
+    },
+    ArmParameter { name: "internal_step", unit: Some(Unit::SECOND), description: "Longest RK4 sub-step inside a communication step", get: |c| c.integrator.internal_step_s, set: |c, v| c.integrator.internal_step_s = v },
+    ArmParameter { name: "q_noise_std", unit: Some(RADIAN), description: "Standard deviation of the noise on measured angles", get: |c| c.hardware.q_noise_std_rad, set: |c, v| c.hardware.q_noise_std_rad = v },
+    ArmParameter {
+        name: "qd_noise_std",
+        unit: Some(RADIAN_PER_SECOND),
+        description: "Standard deviation of the noise on measured velocities",
+        get: |c| c.hardware.qd_noise_std_rad_s,
+        set: |c, v| c.hardware.qd_noise_std_rad_s = v,
+    },
+];
+
+/// Value references of the arm's variables.
+#[derive(Clone, Debug)]
+struct Layout {
+    tau: Vec<RealVar>,
+    q: Vec<RealVar>,
+    qd: Vec<RealVar>,
+    ee: [RealVar; 4],
+    q_meas: Vec<RealVar>,
+    qd_meas: Vec<RealVar>,
+    /// `joint_params[p][i]`: parameter p of joint i.
+    joint_params: Vec<Vec<RealVar>>,
+    q0: Vec<RealVar>,
+    qd0: Vec<RealVar>,
+    arm_params: Vec<RealVar>,
+    seed: IntegerVar,
+}
+
+/// The FMU's variable table and layout for `config`, an arm of n joints.
+fn table(identifier: &str, config: &ArmConfig, initial: &ArmState) -> Result<(ModelDescription, Layout), BuildError> {
+    let n = config.arm.dof();
+    let seed = i32::try_from(config.hardware.seed).map_err(|_| BuildError::Spec(format!("noise seed {} does not fit an FMI Integer", config.hardware.seed)))?;
+    let mut b = TableBuilder::new();
+    let joints = |f: &mut dyn FnMut(usize) -> RealVar| (0..n).map(f).collect::<Vec<RealVar>>();
+    let tau = joints(&mut |i| b.input(format!("tau_{}", i + 1), NEWTON_METRE, 0.0, format!("Torque command of joint {}", i + 1)));
+    let q = joints(&mut |i| b.output(format!("q_{}", i + 1), RADIAN, format!("Angle of joint {} relative to link {}", i + 1, i), &[]));
+    let qd = joints(&mut |i| b.output(format!("qd_{}", i + 1), RADIAN_PER_SECOND, format!("Velocity of joint {}", i + 1), &[]));
+    let ee = [
+        b.output("x", METRE, "End-effector position, x", &[]),
+        b.output("y", METRE, "End-effector position, y", &[]),
+        b.output("xd", METRE_PER_SECOND, "End-effector velocity, x", &[]),
+        b.output("yd", METRE_PER_SECOND, "End-effector velocity, y", &[]),
+    ];
+    let q_meas = joints(&mut |i| b.output(format!("q_meas_{}", i + 1), RADIAN, format!("Measured angle of joint {} (encoder, noise)", i + 1), &[]));
+    let qd_meas = joints(&mut |i| b.output(format!("qd_meas_{}", i + 1), RADIAN_PER_SECOND, format!("Measured velocity of joint {} (noise)", i + 1), &[]));
+    let joint_params = JOINT_PARAMETERS
+        .iter()
+        .map(|p| {
+            (0..n)
+                .map(|i| b.parameter(format!("{}_{}", p.name, i + 1), p.unit, (p.get)(config, i), p.description.replace("{}", &(i + 1).to_string())))
+                .collect()
+        })
+        .collect();
+    let q0 = joints(&mut |i| b.parameter(format!("q0_{}", i + 1), RADIAN, initial.q[i], format!("Initial angle of joint {}", i + 1)));
+    let qd0 = joints(&mut |i| b.parameter(format!("qd0_{}", i + 1), RADIAN_PER_SECOND, initial.qd[i], format!("Initial velocity of joint {}", i + 1)));
+    let arm_params = ARM_PARAMETERS.iter().map(|p| b.parameter(p.name, p.unit, (p.get)(config), p.description)).collect();
+    let seed = b.integer("noise_seed", Causality::Parameter, Variability::Fixed, Some(seed), "Seed of the measurement noise");
+    let description = describe(identifier, format!("Planar {n}-R arm with joint friction (neurarm)"), b.finish())?;
+    Ok((description, Layout { tau, q, qd, ee, q_meas, qd_meas, joint_params, q0, qd0, arm_params, seed }))
+}
+
+/// The arm model behind the FMU.
+pub struct PlanarArmModel {
+    description: ModelDescription,
+    layout: Layout,
+    /// The configuration the FMU was exported with: its shape (joint count) and start values.
+    template: ArmConfig,
+    running: Option<(ArmSimulator, Sensors)>,
+    state: ArmState,
+    tau: Vec<f64>,
+    q_meas: Vec<f64>,
+    qd_meas: Vec<f64>,
+}
+
+impl PlanarArmModel {
+    /// The model for `config`, starting from `initial`, named `identifier`.
+    pub fn new(identifier: &str, config: ArmConfig, initial: ArmState) -> Result<Self, BuildError> {
+        config.validate()?;
+        let n = config.arm.dof();
+        if initial.q.len() != n || initial.qd.len() != n {
+            return Err(BuildError::Spec(format!("the initial state has {} angles and {} velocities for {n} joints", initial.q.len(), initial.qd.len())));
+        }
+        let (description, layout) = table(identifier, &config, &initial)?;
+        Ok(Self { description, layout, template: config, running: None, state: initial, tau: vec![0.0; n], q_meas: vec![0.0; n], qd_meas: vec![0.0; n] })
+    }
+
+    /// The configuration in `values`, checked.
+    fn config_from(&self, values: &Values) -> Result<(ArmConfig, ArmState), ArmError> {
+        let mut c = self.template.clone();
+        let n = c.arm.dof();
+        let read = |vars: &[RealVar]| -> Vec<f64> { vars.iter().map(|&v| values[v]).collect() };
+        let initial = ArmState { q: read(&self.layout.q0), qd: read(&self.layout.qd0) };
+        debug_assert_eq!(initial.q.len(), n);
+        for (p, vars) in JOINT_PARAMETERS.iter().zip(&self.layout.joint_params) {
+            for (i, &v) in vars.iter().enumerate() {
+                (p.set)(&mut c, i, values[v]);
+            }
+        }
+        for (p, &v) in ARM_PARAMETERS.iter().zip(&self.layout.arm_params) {
+            (p.set)(&mut c, values[v]);
+        }
+        let seed = values[self.layout.seed];
+        c.hardware.seed = u64::try_from(seed).map_err(|_| ArmError::NegativeSeed(seed))?;
+        // Name problems by the FMU's parameter names, not the configuration's fields.
+        c.validate().map_err(ArmError::Parameter)?;
+        Ok((c, initial))
+    }
+
+    fn write_outputs(&mut self, values: &mut Values) {
+        let (_, sensors) = self.running.as_mut().expect("outputs are written only while running");
+        let params = &self.template.arm;
+        let l = &self.layout;
+        values.write_reals(&l.q, &self.state.q);
+        values.write_reals(&l.qd, &self.state.qd);
+        values.write_reals(&l.ee, &end_effector_state(params, &self.state.q, &self.state.qd));
+        sensors.measure(&self.state, &mut self.q_meas, &mut self.qd_meas);
+        values.write_reals(&l.q_meas, &self.q_meas);
+        values.write_reals(&l.qd_meas, &self.qd_meas);
+    }
+
+    fn start(&mut self, values: &Values) -> Result<ArmState, ArmError> {
+        let (config, initial) = self.config_from(values)?;
+        let (sim, sensors) = config.build().map_err(ArmError::Parameter)?;
+        self.template = config;
+        self.running = Some((sim, sensors));
+        Ok(initial)
+    }
+}
+
+impl Model for PlanarArmModel {
+    fn description(&self) -> &ModelDescription {
+        &self.description
+    }
+
+    fn initialize(&mut self, values: &mut Values, _start_time: f64) -> Result<(), ModelError> {
+        self.state = self.start(values)?;
+        if let Some((index, &value)) = self.state.q.iter().chain(&self.state.qd).enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(ArmError::InitialState { index, value }.into());
+        }
+        self.write_outputs(values);
+        Ok(())
+    }
+
+    fn do_step(&mut self, values: &mut Values, _time: f64, step: f64) -> Result<(), ModelError> {
+        values.read_reals(&self.layout.tau, &mut self.tau);
+        let (sim, _) = self.running.as_mut().ok_or(ArmError::NotInitialized)?;
+        sim.step(&mut self.state, &self.tau, step).map_err(ArmError::from)?;
+        if let Some(&v) = self.state.q.iter().chain(&self.state.qd).find(|v| !v.is_finite()) {
+            return Err(ArmError::Diverged(v).into());
+        }
+        self.write_outputs(values);
+        Ok(())
+    }
+
+    fn reset(&mut self) {
+        self.running = None;
+    }
+
+    fn save_state(&self, out: &mut Vec<u8>) {
+        out.put_u8(self.running.is_some() as u8);
+        out.put_f64s(&self.state.q);
+        out.put_f64s(&self.state.qd);
+        let position = self.running.as_ref().map_or(0, |(_, s)| s.stream_position());
+        out.put_u64(position as u64);
+        out.put_u64((position >> 64) as u64);
+    }
+
+    fn load_state(&mut self, values: &Values, bytes: &[u8]) -> Result<(), ModelError> {
+        let n = self.state.q.len();
+        let mut r = Reader::new(bytes);
+        let running = r.u8()?;
+        let q = r.f64s(n)?;
+        let qd = r.f64s(n)?;
+        let position = r.u64()? as u128 | (r.u64()? as u128) << 64;
+        r.finish()?;
+        match running {
+            0 => self.running = None,
+            1 => {
+                self.start(values)?;
+                if let Some((_, sensors)) = self.running.as_mut() {
+                    sensors.set_stream_position(position);
+                }
+            }
+            b => return Err(ArmError::State(StateError::Invalid(format!("invalid running flag {b}"))).into()),
+        }
+        self.state = ArmState { q, qd };
+        Ok(())
+    }
+}
+
+/// The equations, for the FMU's `documentation/index.html`.
+pub const EQUATIONS_HTML: &str = "<p>Joint angles are relative: link i's absolute angle is \
+θ<sub>i</sub> = q<sub>1</sub> + … + q<sub>i</sub>. The arm obeys</p>\
+<p><code>H(q) q̈ + C(q, q̇) q̇ + g(q) + f(q̇) = τ</code></p>\
+<p>with H the mass matrix, C q̇ the Coriolis and centrifugal torques, g the gravity torques of the \
+in-plane gravity g·sin(base_angle) along −y, and f the joint friction, per direction of motion: \
+<code>f(v) = sign(v)·(F<sub>c</sub> + (F<sub>s</sub> − F<sub>c</sub>) exp(−(v/v<sub>s</sub>)²) + \
+b·v<sub>f</sub>·ln(1 + |v|/v<sub>f</sub>))</code> (linear b·|v| when v<sub>f</sub> = 0). A joint at rest \
+stays at rest while the torque needed to hold it is below its static level (stick–slip). The state is \
+integrated with fixed-step RK4, in equal sub-steps no longer than <code>internal_step</code> per \
+communication step; torques are held constant over a communication step. Outputs: \
+<code>x = Σ l<sub>i</sub> cos θ<sub>i</sub></code>, <code>y = Σ l<sub>i</sub> sin θ<sub>i</sub></code>, \
+their time derivatives, and measured angles and velocities (quantised to the encoder resolution and \
+with Gaussian noise when those parameters are non-zero).</p>";

@@ -1,0 +1,131 @@
+//! The `TaskSpaceController` FMU: task-space computed torque for the redundant planar arm,
+//! tracking the paper's reference `x_d(t) = c + (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))`
+//! [m] around the centre c:
+//! `u = J⁺ (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J⁺J) q̇`,
+//! `τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + τ_comp`, with Ĥ, Ĉ, ĝ from the controller's model of the
+//! arm (friction is left to `tau_comp`). Static in its inputs (direct feedthrough); the
+//! reference depends on time.
+
+use std::path::Path;
+
+use fmi2_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
+use nalgebra::Vector2;
+use neurarm_physics::arm::{end_effector_position, ArmParams};
+use neurarm_physics::control::{paper_reference, task_space_torque_into, TaskReference, TaskSpaceData, TaskSpaceGains};
+use serde::{Deserialize, Serialize};
+
+use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN, RADIAN_PER_SECOND};
+use crate::{describe, BuildError, ModelKind};
+
+/// Spec of a task-space controller.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSpaceControllerSpec {
+    /// The controller's model of the arm (its friction is not used).
+    pub model: ArmParams,
+    /// Default gains.
+    pub gains: TaskSpaceGains,
+    /// Default centre of the reference [m].
+    pub centre: [f64; 2],
+    /// Start values of the angle inputs [rad]: a pose where J has full rank.
+    pub q_start: Vec<f64>,
+}
+
+impl ModelKind for TaskSpaceControllerSpec {
+    fn build(&self, identifier: &str, _resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
+        Ok(Box::new(TaskSpaceControllerModel::new(identifier, self.model.clone(), self.gains, self.centre, &self.q_start)?))
+    }
+
+    fn equations_html(&self) -> &'static str {
+        "<p>Reference (centre c = (centre_x, centre_y)): \
+<code>x_d(t) = c + (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))</code> [m].</p>\
+<p><code>u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J#J) q̇</code>, with J# the Moore–Penrose pseudo-inverse \
+(Jᵀ(JJᵀ)⁻¹ away from singular poses; at a singular pose the direction J has lost gets no acceleration); the last term damps the self-motion of the redundant joints, which the task does not fix.</p>\
+<p><code>τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + tau_comp</code>, Ĥ, Ĉ, ĝ from the controller's own arm model \
+(in resources/neurarm.toml). Non-finite inputs fail the step with fmi2Error.</p>"
+    }
+}
+
+/// The task-space controller behind the FMU.
+pub struct TaskSpaceControllerModel {
+    description: ModelDescription,
+    model: ArmParams,
+    q: Vec<RealVar>,
+    qd: Vec<RealVar>,
+    tau_comp: Vec<RealVar>,
+    tau: Vec<RealVar>,
+    reference: [RealVar; 2],
+    error: [RealVar; 2],
+    kp: RealVar,
+    kd: RealVar,
+    null_damping: RealVar,
+    centre: [RealVar; 2],
+    data: TaskSpaceData,
+    /// Inputs as read: angles, velocities, compensation; and the torques.
+    buf: [Vec<f64>; 4],
+}
+
+impl TaskSpaceControllerModel {
+    /// A controller named `identifier` using `model` (the controller's idea of the arm),
+    /// default gains `gains`, reference centre `centre` [m], and start values `q_start` of the
+    /// angle inputs [rad] (a pose away from singularities, so initial outputs exist).
+    pub fn new(identifier: &str, model: ArmParams, gains: TaskSpaceGains, centre: [f64; 2], q_start: &[f64]) -> Result<Self, BuildError> {
+        model.validate()?;
+        let n = model.dof();
+        if n < 2 {
+            return Err(BuildError::Spec("task-space control of a planar position needs at least 2 joints".into()));
+        }
+        if q_start.len() != n {
+            return Err(BuildError::Spec(format!("{} start angles for {n} joints", q_start.len())));
+        }
+        let mut b = TableBuilder::new();
+        let per_joint = |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..n).map(|i| f(b, i)).collect::<Vec<_>>();
+        let q = per_joint(&mut b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
+        let qd = per_joint(&mut b, &|b, i| b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1)));
+        let tau_comp = per_joint(&mut b, &|b, i| {
+            b.input(format!("tau_comp_{}", i + 1), NEWTON_METRE, 0.0, format!("Compensating torque added to joint {} (friction model, NN, or 0)", i + 1))
+        });
+        let all: Vec<RealVar> = q.iter().chain(&qd).chain(&tau_comp).copied().collect();
+        let tau = per_joint(&mut b, &|b, i| b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all));
+        let reference = [b.output("x_ref", METRE, "Reference x_d(t)", &[]), b.output("y_ref", METRE, "Reference y_d(t)", &[])];
+        let error = [b.output("error_x", METRE, "Tracking error x_d − x", &q), b.output("error_y", METRE, "Tracking error y_d − y", &q)];
+        let kp = b.tunable("kp", PER_SECOND_SQUARED, gains.kp, "Position gain K_p");
+        let kd = b.tunable("kd", PER_SECOND, gains.kd, "Velocity gain K_d");
+        let null_damping = b.tunable("null_damping", PER_SECOND, gains.null_damping, "Null-space damping k_null: self-motion decays as -k_null (I - J#J) qd");
+        let centre = [
+            b.parameter("centre_x", METRE, centre[0], "x of the reference's centre"),
+            b.parameter("centre_y", METRE, centre[1], "y of the reference's centre"),
+        ];
+        let text = format!("Task-space computed-torque controller for a {n}-joint planar arm, the paper's reference (neurarm)");
+        let description = describe(identifier, text, b.finish())?;
+        let data = TaskSpaceData::new(&model);
+        Ok(Self { description, model, q, qd, tau_comp, tau, reference, error, kp, kd, null_damping, centre, data, buf: std::array::from_fn(|_| vec![0.0; n]) })
+    }
+}
+
+impl StaticModel for TaskSpaceControllerModel {
+    fn description(&self) -> &ModelDescription {
+        &self.description
+    }
+
+    fn compute(&mut self, values: &mut Values, time: f64) -> Result<(), ModelError> {
+        let [q, qd, comp, tau] = &mut self.buf;
+        values.read_reals(&self.q, q);
+        values.read_reals(&self.qd, qd);
+        values.read_reals(&self.tau_comp, comp);
+        let centre = Vector2::new(values[self.centre[0]], values[self.centre[1]]);
+        let gains = TaskSpaceGains { kp: values[self.kp], kd: values[self.kd], null_damping: values[self.null_damping] };
+        let (position, velocity, acceleration) = paper_reference(time, centre);
+        let x = end_effector_position(&self.model, q);
+        values[self.reference[0]] = position.x;
+        values[self.reference[1]] = position.y;
+        values[self.error[0]] = position.x - x.x;
+        values[self.error[1]] = position.y - x.y;
+        let reference = TaskReference { position, velocity, acceleration };
+        if !task_space_torque_into(&self.model, &mut self.data, q, qd, &reference, &gains, comp, tau) {
+            return Err(ModelError::msg(format!("no control law at t = {time} s: the inputs q = {q:?}, qd = {qd:?} are not finite")));
+        }
+        values.write_reals(&self.tau, tau);
+        Ok(())
+    }
+}

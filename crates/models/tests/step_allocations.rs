@@ -1,0 +1,134 @@
+//! Every model's `fmi2DoStep` allocates nothing: each model runs through the FMI layer's
+//! instance (the code the C ABI calls), initialised and driven with changing inputs, while a
+//! counting global allocator watches the stepping thread.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use fmi2_export::instance::{Instance, Status};
+use fmi2_export::Model;
+use nalgebra::{DMatrix, DVector};
+use neurarm_models::*;
+use neurarm_physics::arm::ArmParams;
+use neurarm_physics::config::ArmConfig;
+use neurarm_physics::control::TaskSpaceGains;
+use neurarm_physics::nn::{MinMaxScaling, Mlp, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
+
+struct Counting;
+
+thread_local! {
+    static WATCHING: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if WATCHING.with(Cell::get) {
+            COUNT.with(|c| c.set(c.get() + 1));
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+fn allocations_during(f: impl FnOnce()) -> usize {
+    COUNT.with(|c| c.set(0));
+    WATCHING.with(|w| w.set(true));
+    f();
+    WATCHING.with(|w| w.set(false));
+    COUNT.with(Cell::get)
+}
+
+/// A small net with fixed weights, written as a weights file.
+fn net_file(n_in: usize, hidden: usize, n_out: usize) -> WeightsFile {
+    let f = |a: usize, b: usize| ((a * 7 + b * 3) % 11) as f64 / 8.0 - 0.6;
+    let net = Mlp {
+        iw: DMatrix::from_fn(hidden, n_in, f),
+        b1: DVector::from_fn(hidden, |j, _| f(j, 1)),
+        lw: DMatrix::from_fn(n_out, hidden, f),
+        b2: DVector::from_fn(n_out, |k, _| f(k, 2)),
+        input_scaling: MinMaxScaling { min: vec![-3.0; n_in], max: vec![3.0; n_in] },
+        output_scaling: MinMaxScaling { min: vec![-2.0; n_out], max: vec![2.0; n_out] },
+    };
+    let signals = |p: &str, n: usize| (1..=n).map(|i| Signal { name: format!("{p}_{i}"), unit: String::new() }).collect();
+    let report = TrainReport { epochs: 0, best_epoch: 0, stop_reason: StopReason::Epochs, restart: 0, train_mse: 0.0, validation_mse: None, test_mse: None, counts: [0; 3] };
+    WeightsFile::new(&net, signals("x", n_in), signals("y", n_out), TrainSettings::default(), report)
+}
+
+/// Initialises `model`, then counts the allocations of 500 steps of 1 ms, setting every real
+/// input to a new value before each step.
+fn step_allocations(model: Box<dyn Model>) -> usize {
+    let description = model.description().clone();
+    let inputs: Vec<u32> = description
+        .variables
+        .iter()
+        .filter(|v| v.causality == fmi2_export::Causality::Input && v.base_type() == fmi2_export::description::BaseType::Real)
+        .map(|v| v.value_reference)
+        .collect();
+    let outputs: Vec<u32> = description.variables.iter().filter(|v| v.causality == fmi2_export::Causality::Output).map(|v| v.value_reference).collect();
+    let name = description.model_identifier.clone();
+    let mut instance = Instance::new("probe", &description.guid(), model, Box::new(|_, _, m| eprintln!("{m}")), false).unwrap();
+    assert_eq!(instance.setup_experiment(None, 0.0, None), Status::Ok);
+    assert_eq!(instance.enter_initialization_mode(), Status::Ok);
+    assert_eq!(instance.exit_initialization_mode(), Status::Ok, "{name}");
+    let mut values = vec![0.0; inputs.len()];
+    let mut out = vec![0.0; outputs.len()];
+    // Warm up: the counter itself is lazily set up on first use.
+    assert!(allocations_during(|| drop(Box::new(1))) >= 1, "the counter must see allocations");
+    let count = allocations_during(|| {
+        for k in 0..500 {
+            let t = k as f64 * 1e-3;
+            for (i, v) in values.iter_mut().enumerate() {
+                *v = 0.4 + 0.3 * (3.0 * t + i as f64).sin();
+            }
+            assert_eq!(instance.set_real(&inputs, &values), Status::Ok);
+            assert_eq!(instance.do_step(t, 1e-3), Status::Ok);
+            assert_eq!(instance.get_real(&outputs, &mut out), Status::Ok);
+        }
+    });
+    assert!(out.iter().all(|v| v.is_finite()) && out.iter().any(|v| *v != 0.0), "{name} computed something: {out:?}");
+    count
+}
+
+#[test]
+fn every_models_step_allocates_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, file) in [("friction.json", net_file(1, 5, 1)), ("gravity.json", net_file(4, 6, 4))] {
+        std::fs::write(dir.path().join(name), file.to_json()).unwrap();
+    }
+    let mut config = ArmConfig::default();
+    config.arm.base_angle_rad = 1.0;
+    config.hardware.q_noise_std_rad = 1e-3;
+    config.hardware.encoder_counts_per_rev = Some(vec![4096.0; 4]);
+    let arm = ArmParams::default_four_link();
+    let specs = [
+        ModelSpec::PlanarArm(PlanarArmSpec { config, q0: vec![0.3, -0.5, 0.7, -0.2], qd0: vec![0.0; 4] }),
+        ModelSpec::NnCompensator(NnCompensatorSpec {
+            joints: 4,
+            friction: vec!["friction.json".into(); 4],
+            gravity: Some("gravity.json".into()),
+            enable_friction: true,
+            enable_gravity: true,
+        }),
+        ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: arm.clone().with_base_angle(1.0), enable_friction: true, enable_gravity: true }),
+        ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
+            model: arm.clone().frictionless(),
+            gains: TaskSpaceGains::default(),
+            centre: [0.45, 0.1],
+            q_start: vec![-0.4, 0.9, 0.7, 0.5],
+        }),
+        ModelSpec::JointController(JointControllerSpec { joints: 4, kp: 50.0, kd: 2.0, use_sequence: true }),
+        ModelSpec::Integrator(IntegratorSpec { y0: 1.0 }),
+        ModelSpec::Gain(GainSpec { k: 2.0 }),
+    ];
+    for (i, model) in specs.into_iter().enumerate() {
+        let spec = FmuSpec { identifier: format!("Model{i}"), model };
+        let built = spec.build_from(Some(dir.path())).unwrap();
+        assert_eq!(step_allocations(built), 0, "{:?}", spec.model);
+    }
+}

@@ -1,0 +1,265 @@
+//! Control laws of the paper as plain functions of the arm model: task-space computed torque
+//! for the redundant arm (pseudo-inverse with null-space damping) and joint-space P control
+//! with gravity compensation. Nothing here knows about FMI; the controller FMUs wrap these.
+//!
+//! The task-space law runs in [`TaskSpaceData`], made once per arm: [`task_space_torque_into`]
+//! allocates nothing. [`task_space_acceleration`] and [`computed_torque`] are conveniences
+//! over the same code for one call.
+
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+
+use crate::arm::{inverse_dynamics_rnea_into, jacobian, jacobian_dot_qd, jacobian_into, ArmData, ArmParams};
+
+/// The paper's task-space reference around `centre` [m] at time `t` [s]:
+/// x_d = centre + (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t)). The curve (period 2π s) starts
+/// at centre + (0.2, 0.15) and passes through `centre` itself where sin t = −1/2.
+/// Returns position [m], velocity [m/s] and acceleration [m/s²].
+pub fn paper_reference(t: f64, centre: Vector2<f64>) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
+    let (s1, c1, s2, c2) = (t.sin(), t.cos(), (2.0 * t).sin(), (2.0 * t).cos());
+    let x = centre + Vector2::new(0.2 * (c1 + s2), 0.15 * (s1 + c2));
+    let xd = Vector2::new(0.2 * (-s1 + 2.0 * c2), 0.15 * (c1 - 2.0 * s2));
+    let xdd = Vector2::new(0.2 * (-c1 - 4.0 * s2), 0.15 * (-s1 - 4.0 * c2));
+    (x, xd, xdd)
+}
+
+/// Moore–Penrose pseudo-inverse J⁺ (n×2) of a 2×n Jacobian `jac` into `out`, with `jac_t`
+/// (n×2) and `jjt_inverse` (2×2) as scratch. Away from singular poses this is Jᵀ (J Jᵀ)⁻¹;
+/// where J loses rank (σ_min < 1e-6 σ_max) it is Jᵀ (J Jᵀ)⁺ with the lost direction dropped
+/// (the identity J⁺ = Jᵀ (J Jᵀ)⁺ holds for any J), from the closed-form eigenvectors of the
+/// 2×2 matrix J Jᵀ. So J⁺ exists at every pose: any master that starts its connections at
+/// zero (q = 0 is the stretched, singular pose) gets a bounded answer. Returns false, leaving
+/// `out` meaningless, only when J is not finite.
+pub fn pseudo_inverse_into(jac: &DMatrix<f64>, jac_t: &mut DMatrix<f64>, jjt_inverse: &mut DMatrix<f64>, out: &mut DMatrix<f64>) -> bool {
+    if !jac.iter().all(|v| v.is_finite()) {
+        return false;
+    }
+    jac.transpose_to(jac_t);
+    let mut m = Matrix2::zeros();
+    jac.mul_to(jac_t, &mut m);
+    // det(JJᵀ)/‖JJᵀ‖² ≈ (σ₂/σ₁)²: the fast form while σ₂/σ₁ > 1e-6.
+    let regular = m.determinant().abs() > 1e-12 * m.norm_squared();
+    match m.try_inverse().filter(|_| regular) {
+        Some(inv) => jjt_inverse.copy_from(&inv),
+        None => jjt_inverse.copy_from(&rank_cut_inverse(&m)),
+    }
+    jac_t.mul_to(jjt_inverse, out);
+    true
+}
+
+/// (J Jᵀ)⁺ of the symmetric positive semi-definite 2×2 `m` = J Jᵀ, keeping the eigenvalue
+/// λ₂ only if σ₂ = √λ₂ exceeds 1e-6 σ₁.
+fn rank_cut_inverse(m: &Matrix2<f64>) -> Matrix2<f64> {
+    let (a, b, c) = (m[(0, 0)], 0.5 * (m[(0, 1)] + m[(1, 0)]), m[(1, 1)]);
+    let half_gap = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    let largest = 0.5 * (a + c) + half_gap;
+    if !(largest > 0.0) {
+        return Matrix2::zeros();
+    }
+    let smallest = (0.5 * (a + c) - half_gap).max(0.0);
+    // Eigenvector of the largest eigenvalue from the better-conditioned row of m − λ₁I.
+    let v = if a >= c { Vector2::new(largest - c, b) } else { Vector2::new(b, largest - a) };
+    let v = if v.norm() > 0.0 { v.normalize() } else { Vector2::new(1.0, 0.0) };
+    let w = Vector2::new(-v.y, v.x);
+    let mut inverse = v * v.transpose() / largest;
+    if smallest > 1e-12 * largest {
+        inverse += w * w.transpose() / smallest;
+    }
+    inverse
+}
+
+/// Moore–Penrose pseudo-inverse J⁺ (n×2) of a 2×n Jacobian: [`pseudo_inverse_into`] into a
+/// new matrix. `None` only when J is not finite.
+pub fn pseudo_inverse(jac: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let n = jac.ncols();
+    let (mut jac_t, mut jjt_inverse, mut out) = (DMatrix::zeros(n, 2), DMatrix::zeros(2, 2), DMatrix::zeros(n, 2));
+    pseudo_inverse_into(jac, &mut jac_t, &mut jjt_inverse, &mut out).then_some(out)
+}
+
+/// Gains and null-space damping of the task-space controller.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TaskSpaceGains {
+    /// Position gain K_p [1/s²] (the paper: 1000).
+    pub kp: f64,
+    /// Velocity gain K_d [1/s] (the paper: 160).
+    pub kd: f64,
+    /// Damping of the self-motion in the null space of J [1/s]: the redundant joints get
+    /// q̈_null = −k (I − J⁺J) q̇, so motion the task does not need dies out.
+    pub null_damping: f64,
+}
+
+impl Default for TaskSpaceGains {
+    fn default() -> Self {
+        Self { kp: 1000.0, kd: 160.0, null_damping: 10.0 }
+    }
+}
+
+/// Desired end-effector motion: position [m], velocity [m/s], acceleration [m/s²].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TaskReference {
+    /// x_d.
+    pub position: Vector2<f64>,
+    /// ẋ_d.
+    pub velocity: Vector2<f64>,
+    /// ẍ_d.
+    pub acceleration: Vector2<f64>,
+}
+
+/// Scratch space of the task-space law for one arm, made once: the Jacobian J, its
+/// pseudo-inverse J⁺, the null-space projector I − J⁺J, the joint accelerations u and the
+/// rigid-body data of the computed torque.
+#[derive(Clone, Debug)]
+pub struct TaskSpaceData {
+    jacobian: DMatrix<f64>,
+    jacobian_t: DMatrix<f64>,
+    jjt_inverse: DMatrix<f64>,
+    pseudo_inverse: DMatrix<f64>,
+    pinv_j: DMatrix<f64>,
+    null_projector: DMatrix<f64>,
+    qd: DVector<f64>,
+    task_acceleration: DVector<f64>,
+    task: DVector<f64>,
+    null_motion: DVector<f64>,
+    u: DVector<f64>,
+    arm: ArmData,
+}
+
+impl TaskSpaceData {
+    /// Scratch space for the arm of `model`.
+    pub fn new(model: &ArmParams) -> Self {
+        let n = model.dof();
+        Self {
+            jacobian: DMatrix::zeros(2, n),
+            jacobian_t: DMatrix::zeros(n, 2),
+            jjt_inverse: DMatrix::zeros(2, 2),
+            pseudo_inverse: DMatrix::zeros(n, 2),
+            pinv_j: DMatrix::zeros(n, n),
+            null_projector: DMatrix::zeros(n, n),
+            qd: DVector::zeros(n),
+            task_acceleration: DVector::zeros(2),
+            task: DVector::zeros(n),
+            null_motion: DVector::zeros(n),
+            u: DVector::zeros(n),
+            arm: ArmData::new(model),
+        }
+    }
+
+    /// The joint accelerations u [rad/s²] of the last [`task_space_acceleration_into`].
+    pub fn acceleration(&self) -> &[f64] {
+        self.u.as_slice()
+    }
+
+    /// The Jacobian J [m/rad] of the last call.
+    pub fn jacobian(&self) -> &DMatrix<f64> {
+        &self.jacobian
+    }
+
+    /// The pseudo-inverse J⁺ [rad/m] of the last call.
+    pub fn pseudo_inverse(&self) -> &DMatrix<f64> {
+        &self.pseudo_inverse
+    }
+
+    /// The null-space projector I − J⁺J of the last call.
+    pub fn null_projector(&self) -> &DMatrix<f64> {
+        &self.null_projector
+    }
+}
+
+/// Joint accelerations the task-space law asks for,
+/// u = J⁺ (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k (I − J⁺J) q̇ [rad/s²], into
+/// `data` ([`TaskSpaceData::acceleration`]). False when the inputs are not finite.
+pub fn task_space_acceleration_into(
+    model: &ArmParams,
+    data: &mut TaskSpaceData,
+    q: &[f64],
+    qd: &[f64],
+    reference: &TaskReference,
+    gains: &TaskSpaceGains,
+) -> bool {
+    let d = data;
+    jacobian_into(model, q, d.jacobian.as_mut_slice());
+    if !pseudo_inverse_into(&d.jacobian, &mut d.jacobian_t, &mut d.jjt_inverse, &mut d.pseudo_inverse) {
+        return false;
+    }
+    d.qd.copy_from_slice(qd);
+    let x = crate::arm::end_effector_position(model, q);
+    let xd = Vector2::new((d.jacobian.row(0) * &d.qd)[0], (d.jacobian.row(1) * &d.qd)[0]);
+    let a = reference.acceleration + gains.kd * (reference.velocity - xd) + gains.kp * (reference.position - x) - jacobian_dot_qd(model, q, qd);
+    d.task_acceleration.copy_from_slice(a.as_slice());
+    d.pseudo_inverse.mul_to(&d.task_acceleration, &mut d.task);
+    d.pseudo_inverse.mul_to(&d.jacobian, &mut d.pinv_j);
+    d.null_projector.fill_with_identity();
+    d.null_projector -= &d.pinv_j;
+    d.null_projector.mul_to(&d.qd, &mut d.null_motion);
+    for ((u, t), m) in d.u.iter_mut().zip(d.task.iter()).zip(d.null_motion.iter()) {
+        *u = t - gains.null_damping * m;
+    }
+    d.u.iter().all(|u| u.is_finite())
+}
+
+/// Joint accelerations the task-space law asks for: [`task_space_acceleration_into`] into a
+/// new vector; `None` when the inputs are not finite.
+pub fn task_space_acceleration(model: &ArmParams, q: &[f64], qd: &[f64], reference: &TaskReference, gains: &TaskSpaceGains) -> Option<DVector<f64>> {
+    let mut data = TaskSpaceData::new(model);
+    task_space_acceleration_into(model, &mut data, q, qd, reference, gains).then_some(data.u)
+}
+
+/// Computed torque τ = Ĥ(q) u + Ĉ(q,q̇) q̇ + ĝ(q) + τ_comp [N·m] into `out`, with `model` the
+/// controller's model of the arm (friction excluded: that is what `tau_comp` is for).
+pub fn computed_torque_into(model: &ArmParams, data: &mut ArmData, q: &[f64], qd: &[f64], u: &[f64], tau_comp: &[f64], out: &mut [f64]) {
+    inverse_dynamics_rnea_into(model, data, q, qd, u, out);
+    for (t, c) in out.iter_mut().zip(tau_comp) {
+        *t += c;
+    }
+}
+
+/// Computed torque: [`computed_torque_into`] into a new vector.
+pub fn computed_torque(model: &ArmParams, q: &[f64], qd: &[f64], u: &DVector<f64>, tau_comp: &[f64]) -> DVector<f64> {
+    let mut tau = DVector::zeros(model.dof());
+    computed_torque_into(model, &mut ArmData::new(model), q, qd, u.as_slice(), tau_comp, tau.as_mut_slice());
+    tau
+}
+
+/// The whole task-space law: the accelerations of [`task_space_acceleration_into`] turned
+/// into joint torques by [`computed_torque_into`], plus `tau_comp` [N·m], into `out`. False
+/// when the inputs are not finite.
+#[allow(clippy::too_many_arguments)] // the law's inputs, each a different quantity
+pub fn task_space_torque_into(
+    model: &ArmParams,
+    data: &mut TaskSpaceData,
+    q: &[f64],
+    qd: &[f64],
+    reference: &TaskReference,
+    gains: &TaskSpaceGains,
+    tau_comp: &[f64],
+    out: &mut [f64],
+) -> bool {
+    if !task_space_acceleration_into(model, data, q, qd, reference, gains) {
+        return false;
+    }
+    computed_torque_into(model, &mut data.arm, q, qd, data.u.as_slice(), tau_comp, out);
+    true
+}
+
+/// Joint-space P control with gravity compensation: τ = ĝ + K_p (q_d − q) [N·m].
+pub fn joint_p_torque(q: &[f64], q_target: &[f64], kp: f64, gravity_comp: &[f64]) -> DVector<f64> {
+    DVector::from_fn(q.len(), |i, _| gravity_comp[i] + kp * (q_target[i] - q[i]))
+}
+
+/// Joint angles [rad] that put the end effector at `target` [m], found by Newton steps with
+/// the pseudo-inverse from `seed` (so the answer is the solution reached by the smallest
+/// joint motion from there, to first order). `None` if it does not converge to 1e-12 m or
+/// meets a singular pose.
+pub fn inverse_kinematics(model: &ArmParams, target: Vector2<f64>, seed: &[f64]) -> Option<Vec<f64>> {
+    let mut q = seed.to_vec();
+    for _ in 0..100 {
+        let e = target - crate::arm::end_effector_position(model, &q);
+        if e.norm() < 1e-12 {
+            return Some(q);
+        }
+        let step = pseudo_inverse(&jacobian(model, &q))? * DVector::from_column_slice(e.as_slice());
+        for (qi, d) in q.iter_mut().zip(step.iter()) {
+            *qi += d;
+        }
+    }
+    None
+}

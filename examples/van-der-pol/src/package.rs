@@ -1,0 +1,47 @@
+//! Packaging the built library as `VanDerPol.fmu`, for the program `van-der-pol-fmu` and for
+//! the tests and examples of this workspace that need an FMU with no robot in it.
+
+use std::path::{Path, PathBuf};
+
+use fmi2_export::Model;
+
+/// The library's file name as cargo builds it.
+pub const LIBRARY: &str = "libvan_der_pol.so";
+
+/// The equations, for the FMU's documentation page.
+pub const EQUATIONS_HTML: &str = "<p><code>ẍ = μ (1 − x²) ẋ − x + u</code>, <code>x(t0) = x0</code>, \
+<code>ẋ(t0) = v0</code>; classic RK4 in sub-steps of at most 1 ms, with u held over each step.</p>";
+
+/// Writes the FMU of the library at `binary` to `out`.
+pub fn write_fmu(binary: &Path, out: &Path) -> Result<(), String> {
+    let model = crate::VanDerPol::new().map_err(|e| e.to_string())?;
+    fmi2_export::package::write_fmu(out, model.description(), binary, &[], EQUATIONS_HTML).map_err(|e| format!("writing {}: {e}", out.display()))
+}
+
+/// The built library: `$VAN_DER_POL_BINARY`, else beside the running program (or one folder
+/// up, for test programs in `target/<profile>/deps`), else the newest in the workspace's
+/// `target/<profile>/` folders (for doctests, which run from a temporary folder).
+pub fn built_library() -> Result<PathBuf, String> {
+    if let Some(p) = std::env::var_os("VAN_DER_POL_BINARY") {
+        return Ok(PathBuf::from(p));
+    }
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let beside = exe.parent().into_iter().flat_map(|d| [d.join(LIBRARY), d.join("..").join(LIBRARY)]);
+    if let Some(p) = beside.into_iter().find(|p| p.is_file()) {
+        return Ok(p);
+    }
+    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target"));
+    let newest = ["release", "debug"]
+        .iter()
+        .map(|profile| target.join(profile).join(LIBRARY))
+        .filter_map(|p| Some((std::fs::metadata(&p).ok()?.modified().ok()?, p)))
+        .max();
+    newest.map(|(_, p)| p).ok_or_else(|| format!("{LIBRARY} is not built: run `cargo build -p van-der-pol` (scripts/test does)"))
+}
+
+/// `VanDerPol.fmu` in `dir`, packaged from the built library.
+pub fn fmu_in(dir: &Path) -> Result<PathBuf, String> {
+    let out = dir.join("VanDerPol.fmu");
+    write_fmu(&built_library()?, &out)?;
+    Ok(out)
+}
