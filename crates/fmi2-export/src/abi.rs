@@ -122,7 +122,8 @@ unsafe fn with(c: Component, name: &str, body: impl FnOnce(&mut Wrapper) -> Stat
     }
 }
 
-/// Turns a resource location URI (`file:///…` or `file:/…`, percent-encoded) into a folder.
+/// Turns a resource location URI (`file:///…` or `file:/…`, percent-encoded) into a folder
+/// path (which may not exist).
 pub fn resource_folder(uri: &str) -> Result<PathBuf, String> {
     let path = if let Some(rest) = uri.strip_prefix("file://") {
         let rest = rest.strip_prefix("localhost").unwrap_or(rest);
@@ -141,16 +142,14 @@ pub fn resource_folder(uri: &str) -> Result<PathBuf, String> {
     let decoded = percent_encoding::percent_decode_str(path)
         .decode_utf8()
         .map_err(|_| format!("resource location '{uri}' is not valid UTF-8 after percent-decoding"))?;
-    let folder = PathBuf::from(decoded.as_ref());
-    if !folder.is_dir() {
-        return Err(format!("resource folder '{}' does not exist", folder.display()));
-    }
-    Ok(folder)
+    // The folder need not exist: an FMU without resources has none in its archive.
+    Ok(PathBuf::from(decoded.as_ref()))
 }
 
 /// `fmi2Instantiate`: NULL, after logging why, for an empty name, a wrong GUID, missing
-/// callbacks or logger, an unusable resource location or a model type other than
-/// co-simulation.
+/// callbacks or logger, a resource location that is no local file URI, a model type other
+/// than co-simulation, or a factory that fails. The factory gets the resources folder (which
+/// may not exist), or `None` when the host passed no resource location.
 ///
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
@@ -182,9 +181,12 @@ pub unsafe fn instantiate(
             return Err(format!("fmuType {fmu_type} requested, this FMU supports only fmi2CoSimulation (1)"));
         }
         let guid = unsafe { str_arg(guid) }.ok_or("the GUID is NULL or not UTF-8")?;
-        let location = unsafe { str_arg(resource_location) }
-            .ok_or("the resource location is NULL: this FMU reads its model from resources/")?;
-        let model = factory(&resource_folder(location)?).map_err(|e| e.to_string())?;
+        let resources = match unsafe { str_arg(resource_location) } {
+            Some(location) => Some(resource_folder(location)?),
+            None if resource_location.is_null() => None,
+            None => return Err("the resource location is not UTF-8".into()),
+        };
+        let model = factory(resources.as_deref()).map_err(|e| e.to_string())?;
         let sink_host = host(name);
         let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
         let instance = Instance::new(name, guid, model, sink, logging_on != 0).map_err(|e| e.to_string())?;

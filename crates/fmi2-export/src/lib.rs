@@ -72,7 +72,7 @@
 //! }
 //!
 //! // In the model's cdylib: every fmi2* symbol, serving the models this factory makes.
-//! fn factory(_resources: &std::path::Path) -> Result<Box<dyn Model>, ModelError> {
+//! fn factory(_resources: Option<&std::path::Path>) -> Result<Box<dyn Model>, ModelError> {
 //!     Ok(Box::new(Lag::new()?))
 //! }
 //! fmi2_export::export_fmi2!(factory);

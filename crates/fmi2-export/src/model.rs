@@ -175,6 +175,7 @@ impl<T: StaticModel> Model for T {
     }
 }
 
-/// Makes a model from the FMU's `resources/` folder. The layer checks the GUID the host
-/// passes against the returned model's description.
-pub type ModelFactory = fn(resources: &std::path::Path) -> Result<Box<dyn Model>, ModelError>;
+/// Makes a model from the FMU's `resources/` folder (which may not exist, for an FMU without
+/// resources; `None` when the host passed no resource location). The layer checks the GUID
+/// the host passes against the returned model's description.
+pub type ModelFactory = fn(resources: Option<&std::path::Path>) -> Result<Box<dyn Model>, ModelError>;

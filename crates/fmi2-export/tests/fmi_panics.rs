@@ -36,11 +36,11 @@ impl Model for Bomb {
     }
 }
 
-fn bomb(_: &Path) -> Result<Box<dyn Model>, ModelError> {
+fn bomb(_: Option<&Path>) -> Result<Box<dyn Model>, ModelError> {
     Ok(Box::new(Bomb(description())))
 }
 
-fn exploding_factory(_: &Path) -> Result<Box<dyn Model>, ModelError> {
+fn exploding_factory(_: Option<&Path>) -> Result<Box<dyn Model>, ModelError> {
     panic!("factory exploded")
 }
 

@@ -164,7 +164,11 @@ impl FmuSpec {
 }
 
 /// The factory behind every neurarm FMU binary: reads `resources/neurarm.toml`.
-pub fn instantiate(resources: &Path) -> Result<Box<dyn Model>, ModelError> {
+pub fn instantiate(resources: Option<&Path>) -> Result<Box<dyn Model>, ModelError> {
+    let resources = resources.ok_or_else(|| ModelError::msg("the resource location is NULL: this FMU reads its model from resources/"))?;
+    if !resources.is_dir() {
+        return Err(ModelError::msg(format!("resource folder '{}' does not exist", resources.display())));
+    }
     let path = resources.join(SPEC_FILE);
     let text = std::fs::read_to_string(&path).map_err(|e| ModelError::msg(format!("cannot read {}: {e}", path.display())))?;
     let spec = FmuSpec::from_toml(&text).map_err(|e| ModelError::msg(format!("{}: {e}", path.display())))?;

@@ -89,7 +89,7 @@ impl Model for VanDerPol {
     }
 }
 
-fn factory(_resources: &std::path::Path) -> Result<Box<dyn Model>, ModelError> {
+fn factory(_resources: Option<&std::path::Path>) -> Result<Box<dyn Model>, ModelError> {
     Ok(Box::new(VanDerPol::new()?))
 }
 

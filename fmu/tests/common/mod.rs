@@ -13,13 +13,14 @@ pub const OK: c_int = 0;
 pub const ERROR: c_int = 3;
 pub const FATAL: c_int = 4;
 
-/// The FMU binary of this package, which cargo builds before these tests, in the same
-/// profile folder as the test program (`target/<profile>/deps/<test>` → `target/<profile>`).
+/// The FMU binary of this package in the profile folder of the test program
+/// (`target/<profile>/deps/<test>` → `target/<profile>`). `cargo test` does not rebuild a
+/// cdylib, so `cargo build` first (scripts/test does).
 pub fn binary_path() -> PathBuf {
     let exe = std::env::current_exe().expect("the test program's path");
     let profile = exe.parent().and_then(Path::parent).expect("target/<profile>/deps");
     let p = profile.join("libneurarm_fmu.so");
-    assert!(p.is_file(), "{} is missing: cargo builds it with this package's tests", p.display());
+    assert!(p.is_file(), "{} is missing: run `cargo build -p neurarm-fmu` in this profile first (scripts/test does)", p.display());
     p
 }
 
