@@ -13,20 +13,21 @@
 use std::path::PathBuf;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use fmi2_cosim::System;
 use nalgebra::{DMatrix, Vector2};
+use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Settings, REFERENCE_CENTRE};
+use neurarm::export::export_fmu;
+use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
 use neurarm_physics::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{computed_torque, paper_reference, task_space_acceleration, TaskReference, TaskSpaceGains};
-use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Settings, REFERENCE_CENTRE};
-use fmi2_cosim::System;
-use neurarm::export::export_fmu;
-use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
 use neurarm_physics::nn::{train, Mlp, Signal, TrainSettings, WeightsFile};
 
 const STEP: f64 = 1e-3;
 
 fn bench_dir() -> PathBuf {
-    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"));
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"));
     target.join("closed-loop-bench")
 }
 
@@ -42,7 +43,13 @@ fn friction_nets() -> Vec<WeightsFile> {
             let settings = TrainSettings { hidden: 10, epochs: 30, restarts: 1, seed: j as u64, ..TrainSettings::default() };
             let trained = train(&x, &t, &settings, &mut |_| {}).expect("training");
             let signal = |name: String, unit: &str| Signal { name, unit: unit.into() };
-            WeightsFile::new(&trained.net, vec![signal(format!("qd_{}", j + 1), "rad/s")], vec![signal(format!("tau_friction_{}", j + 1), "N.m")], settings, trained.report)
+            WeightsFile::new(
+                &trained.net,
+                vec![signal(format!("qd_{}", j + 1), "rad/s")],
+                vec![signal(format!("tau_friction_{}", j + 1), "N.m")],
+                settings,
+                trained.report,
+            )
         })
         .collect()
 }
@@ -58,7 +65,13 @@ fn loop_step(c: &mut Criterion) {
         sources.push((format!("friction_{}.json", j + 1), path));
     }
     let comp = dir.join("NnFrictionCompensator.fmu");
-    let model = ModelSpec::NnCompensator(NnCompensatorSpec { joints: 4, friction: sources.iter().map(|s| s.0.clone()).collect(), gravity: None, enable_friction: true, enable_gravity: false });
+    let model = ModelSpec::NnCompensator(NnCompensatorSpec {
+        joints: 4,
+        friction: sources.iter().map(|s| s.0.clone()).collect(),
+        gravity: None,
+        enable_friction: true,
+        enable_gravity: false,
+    });
     export_fmu(&FmuSpec { identifier: "NnFrictionCompensator".into(), model }, &sources, &comp).expect("compensator FMU");
     let settings = Settings::quick();
     let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &settings).expect("system");
@@ -71,12 +84,18 @@ fn loop_step(c: &mut Criterion) {
 
     // The same loop without FMI; first checked to compute what the master does.
     let mut plain = PlainLoop::new(nets.iter().map(|w| w.network().expect("net")).collect());
-    let mut check = System::from_spec(&spec, &dir).expect("system").initialize(0.0, STEP, spec.simulation.algorithm, &["arm.x".into(), "arm.y".into()]).expect("initialised");
+    let mut check = System::from_spec(&spec, &dir)
+        .expect("system")
+        .initialize(0.0, STEP, spec.simulation.algorithm, &["arm.x".into(), "arm.y".into()])
+        .expect("initialised");
     for k in 0..2000 {
         check.step().expect("step");
         let [x, y, ..] = plain.step();
         let row = &check.rows()[k + 1];
-        assert!((row[1] - x).abs() < 1e-9 && (row[2] - y).abs() < 1e-9, "the plain loop left the master's at step {k}: {row:?} vs ({x}, {y})");
+        assert!(
+            (row[1] - x).abs() < 1e-9 && (row[2] - y).abs() < 1e-9,
+            "the plain loop left the master's at step {k}: {row:?} vs ({x}, {y})"
+        );
     }
     c.bench_function("closed_loop_1ms/in_process", |b| b.iter(|| black_box(plain.step())));
 }
@@ -103,7 +122,20 @@ impl PlainLoop {
         let (arm, sensors) = config.build().expect("arm");
         let model = config.arm.clone().frictionless();
         let (_, (q0, qd0)) = tracking_start(&config.arm).expect("start");
-        let mut me = Self { config, arm, sensors, model, nets, state: ArmState { q: q0, qd: qd0 }, time: 0.0, q: [0.0; 4], qd: [0.0; 4], comp: [0.0; 4], hidden: [0.0; 10], tau: vec![0.0; 4] };
+        let mut me = Self {
+            config,
+            arm,
+            sensors,
+            model,
+            nets,
+            state: ArmState { q: q0, qd: qd0 },
+            time: 0.0,
+            q: [0.0; 4],
+            qd: [0.0; 4],
+            comp: [0.0; 4],
+            hidden: [0.0; 10],
+            tau: vec![0.0; 4],
+        };
         me.measure_and_control();
         me
     }

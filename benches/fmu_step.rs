@@ -9,9 +9,9 @@ use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::PathBuf;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use neurarm_models::{FmuSpec, SPEC_FILE};
 use neurarm_physics::arm::{end_effector_state, ArmState};
 use neurarm_physics::config::ArmConfig;
-use neurarm_models::{FmuSpec, SPEC_FILE};
 
 type C = *mut c_void;
 type Logger = unsafe extern "C" fn(*mut c_void, *const c_char, c_int, *const c_char, *const c_char);
@@ -59,17 +59,24 @@ fn in_process(c: &mut Criterion) {
 }
 
 fn through_abi(c: &mut Criterion) {
-    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"));
-    let lib = unsafe { libloading::Library::new(target.join("release/libneurarm_fmu.so")) }.expect("build the FMU binary first: cargo build --release -p neurarm-fmu");
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"));
+    let lib = unsafe { libloading::Library::new(target.join("release/libneurarm_fmu.so")) }
+        .expect("build the FMU binary first: cargo build --release -p neurarm-fmu");
     let spec = FmuSpec::planar_arm("PlanarArm", ArmConfig::default());
     let description = spec.description().unwrap();
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join(SPEC_FILE), spec.to_toml()).unwrap();
     let vr = |n: &str| description.variables.iter().find(|v| v.name == n).unwrap().value_reference;
     let inputs: Vec<u32> = (1..=4).map(|i| vr(&format!("tau_{i}"))).collect();
-    let outputs: Vec<u32> = ["q_1", "q_2", "q_3", "q_4", "qd_1", "qd_2", "qd_3", "qd_4", "x", "y", "xd", "yd"].iter().map(|n| vr(n)).collect();
+    let outputs: Vec<u32> =
+        ["q_1", "q_2", "q_3", "q_4", "qd_1", "qd_2", "qd_3", "qd_4", "x", "y", "xd", "yd"].iter().map(|n| vr(n)).collect();
     unsafe {
-        let instantiate = *lib.get::<unsafe extern "C" fn(*const c_char, c_int, *const c_char, *const c_char, *const Callbacks, c_int, c_int) -> C>(b"fmi2Instantiate\0").unwrap();
+        let instantiate = *lib
+            .get::<unsafe extern "C" fn(*const c_char, c_int, *const c_char, *const c_char, *const Callbacks, c_int, c_int) -> C>(
+                b"fmi2Instantiate\0",
+            )
+            .unwrap();
         let setup = *lib.get::<unsafe extern "C" fn(C, c_int, f64, f64, c_int, f64) -> c_int>(b"fmi2SetupExperiment\0").unwrap();
         let enter = *lib.get::<unsafe extern "C" fn(C) -> c_int>(b"fmi2EnterInitializationMode\0").unwrap();
         let exit = *lib.get::<unsafe extern "C" fn(C) -> c_int>(b"fmi2ExitInitializationMode\0").unwrap();

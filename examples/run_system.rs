@@ -25,7 +25,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let config = ArmConfig::default();
     let hanging = vec![-FRAC_PI_2, 0.0, 0.0, 0.0];
     let arm = export("PlanarArm", ModelSpec::PlanarArm(PlanarArmSpec { config: config.clone(), q0: hanging, qd0: vec![0.0; 4] }))?;
-    let ctl = export("JointController", ModelSpec::JointController(JointControllerSpec { joints: 4, kp: 50.0, kd: 2.0, use_sequence: false }))?;
+    let ctl =
+        export("JointController", ModelSpec::JointController(JointControllerSpec { joints: 4, kp: 50.0, kd: 2.0, use_sequence: false }))?;
     let gravity = IdealCompensatorSpec { arm: config.arm.with_base_angle(FRAC_PI_2), enable_friction: false, enable_gravity: true };
     let comp = export("GravityCompensator", ModelSpec::IdealCompensator(gravity))?;
 
@@ -51,7 +52,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(e) = errors.iter().find(|e| e.abs() > 0.05) {
         return Err(format!("the loop did not settle: an error of {e} rad").into());
     }
-    let simulation = fmi2_cosim::SimulationSpec { start: 0.0, stop: 5.0, step: 1e-3, algorithm: Algorithm::GaussSeidel, record, record_every: 1 };
+    let simulation =
+        fmi2_cosim::SimulationSpec { start: 0.0, stop: 5.0, step: 1e-3, algorithm: Algorithm::GaussSeidel, record, record_every: 1 };
     let ssp = dir.join("hold.ssp");
     fmi2_cosim::ssp::write_system(&system, &simulation, &ssp)?;
     println!("the loop as an SSP archive: {} (in a temporary folder unless you name one)", ssp.display());

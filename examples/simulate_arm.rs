@@ -5,8 +5,8 @@
 
 use std::time::Instant;
 
-use neurarm_physics::arm::*;
 use neurarm::table::write_atomic;
+use neurarm_physics::arm::*;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let output = std::env::args().nth(1).unwrap_or_else(|| "arm_example.csv".into());

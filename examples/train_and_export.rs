@@ -22,14 +22,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n = config.arm.dof();
 
     // 1. The arm as an FMU.
-    let arm = FmuSpec { identifier: "MyArm".into(), model: ModelSpec::PlanarArm(PlanarArmSpec { config: config.clone(), q0: vec![0.0; n], qd0: vec![0.0; n] }) };
+    let arm = FmuSpec {
+        identifier: "MyArm".into(),
+        model: ModelSpec::PlanarArm(PlanarArmSpec { config: config.clone(), q0: vec![0.0; n], qd0: vec![0.0; n] }),
+    };
     export_fmu(&arm, &[], &dir.join("MyArm.fmu"))?;
 
     let mut sources = Vec::new();
     for j in 0..n {
         // 2. A CSV of training pairs: velocities from −5 to 5 rad/s, away from the jump at 0.
         let csv = dir.join(format!("friction_{}.csv", j + 1));
-        let rows = (0..=200).map(|k| -5.0 + 0.05 * k as f64).filter(|v: &f64| v.abs() > 0.02).map(|v| vec![v, config.arm.friction[j].torque(v)]);
+        let rows =
+            (0..=200).map(|k| -5.0 + 0.05 * k as f64).filter(|v: &f64| v.abs() > 0.02).map(|v| vec![v, config.arm.friction[j].torque(v)]);
         write_atomic(&csv, &["qd".into(), "tau".into()], rows)?;
 
         // 3. Read it back and train a 1-10-1 net by Levenberg–Marquardt.

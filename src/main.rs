@@ -5,15 +5,15 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::DMatrix;
+use neurarm::export::export_fmu;
+use neurarm::simulate::{simulate, TorqueInput};
+use neurarm::table::{write_atomic, write_text_atomic, NumericTable};
+use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec};
 use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
-use neurarm::export::export_fmu;
-use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec};
-use neurarm::simulate::{simulate, TorqueInput};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
-use neurarm::table::{write_atomic, write_text_atomic, NumericTable};
-use nalgebra::DMatrix;
-use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 
 #[derive(Parser)]
@@ -197,7 +197,8 @@ fn run(cli: Cli) -> Result<()> {
             let spec = fmi2_cosim::SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
             let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
             let outcome = fmi2_cosim::run(&spec, base).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
-            write_atomic(&output, &outcome.columns, outcome.rows.iter().cloned()).with_context(|| format!("writing {}", output.display()))?;
+            write_atomic(&output, &outcome.columns, outcome.rows.iter().cloned())
+                .with_context(|| format!("writing {}", output.display()))?;
             match outcome.error {
                 None => eprintln!("wrote {} rows to {}", outcome.rows.len(), output.display()),
                 Some(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", outcome.rows.len(), output.display()),
@@ -211,7 +212,8 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(t) = threads {
                 settings.threads = t.max(1);
             }
-            let r = neurarm::experiments::paper::run_paper(&output, &settings, &mut |line| eprintln!("[paper] {line}")).map_err(anyhow::Error::msg)?;
+            let r = neurarm::experiments::paper::run_paper(&output, &settings, &mut |line| eprintln!("[paper] {line}"))
+                .map_err(anyhow::Error::msg)?;
             let t = r.table_1;
             eprintln!(
                 "Table 1 MSE [m²]: sim perfect {:.3e}, NN {:.3e}, none {:.3e}; real NN {:.3e}, none {:.3e}\nratios: sim NN/perfect {:.3}, none/perfect {:.1}; real NN/none {:.3}",
@@ -230,14 +232,21 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
         Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, output } => {
-            let settings = TrainSettings { hidden, restarts, seed, epochs, max_fail, split: [split[0], split[1], split[2]], ..Default::default() };
+            let settings =
+                TrainSettings { hidden, restarts, seed, epochs, max_fail, split: [split[0], split[1], split[2]], ..Default::default() };
             let weights = train_from_csv(&data, &inputs, &targets, settings)?;
             write_text_atomic(&output, &weights.to_json()).with_context(|| format!("writing {}", output.display()))?;
             let r = &weights.report;
             let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
             eprintln!(
                 "wrote {}: {} epochs (best {}), stopped by {:?}; MSE train {:.3e}, validation {}, test {} [target units²]",
-                output.display(), r.epochs, r.best_epoch, r.stop_reason, r.train_mse, opt(r.validation_mse), opt(r.test_mse)
+                output.display(),
+                r.epochs,
+                r.best_epoch,
+                r.stop_reason,
+                r.train_mse,
+                opt(r.validation_mse),
+                opt(r.test_mse)
             );
         }
         Command::Eval { net, data, output } => {
@@ -266,7 +275,8 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 bail!("give --friction nets, a --gravity net, or both");
             };
-            let mut sources: Vec<(String, PathBuf)> = friction.iter().enumerate().map(|(i, p)| (format!("friction_{}.json", i + 1), p.clone())).collect();
+            let mut sources: Vec<(String, PathBuf)> =
+                friction.iter().enumerate().map(|(i, p)| (format!("friction_{}.json", i + 1), p.clone())).collect();
             if let Some(g) = &gravity {
                 sources.push(("gravity.json".into(), g.clone()));
             }
@@ -287,10 +297,7 @@ fn run(cli: Cli) -> Result<()> {
             let (config, initial) = arm.load()?;
             let n = config.arm.dof();
             let identifier = identifier_for(name, &output, "PlanarArm");
-            let spec = FmuSpec {
-                identifier,
-                model: ModelSpec::PlanarArm(PlanarArmSpec { config, q0: initial.q, qd0: initial.qd }),
-            };
+            let spec = FmuSpec { identifier, model: ModelSpec::PlanarArm(PlanarArmSpec { config, q0: initial.q, qd0: initial.qd }) };
             export_fmu(&spec, &[], &output).map_err(anyhow::Error::msg)?;
             eprintln!("wrote {} ({}, {n} joints)", output.display(), spec.identifier);
         }

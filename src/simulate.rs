@@ -8,9 +8,9 @@
 
 use std::path::Path;
 
+use crate::table::{NumericTable, TableError};
 use neurarm_physics::arm::{end_effector_state, ArmState, StepError};
 use neurarm_physics::config::ArmConfig;
-use crate::table::{NumericTable, TableError};
 
 /// Name of joint `i`'s (0-based) column with prefix `prefix`, e.g. `tau_1`.
 pub fn joint_column(prefix: &str, i: usize) -> String {

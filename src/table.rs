@@ -69,11 +69,7 @@ impl NumericTable {
         }
         for want in required {
             if !names.iter().any(|n| n == want) {
-                return Err(err(
-                    Some(1),
-                    None,
-                    format!("missing column '{want}' (the header has: {})", names.join(", ")),
-                ));
+                return Err(err(Some(1), None, format!("missing column '{want}' (the header has: {})", names.join(", "))));
             }
         }
         for (i, name) in names.iter().enumerate() {
@@ -91,9 +87,7 @@ impl NumericTable {
             let line = record.position().map_or(0, |p| p.line());
             for (c, cell) in record.iter().enumerate() {
                 let at = || Some((c + 1, names[c].clone()));
-                let value: f64 = cell
-                    .parse()
-                    .map_err(|_| err(Some(line), at(), format!("'{cell}' is not a number")))?;
+                let value: f64 = cell.parse().map_err(|_| err(Some(line), at(), format!("'{cell}' is not a number")))?;
                 if !value.is_finite() {
                     return Err(err(Some(line), at(), format!("{cell} is not a finite number")));
                 }
@@ -127,11 +121,7 @@ impl NumericTable {
                     path: self.path.clone(),
                     line: Some(self.lines[r]),
                     column: Some((index + 1, name.to_owned())),
-                    message: format!(
-                        "{name} must increase from row to row, but {} follows {}",
-                        col[r],
-                        col[r - 1]
-                    ),
+                    message: format!("{name} must increase from row to row, but {} follows {}", col[r], col[r - 1]),
                 });
             }
         }

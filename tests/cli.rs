@@ -4,10 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
-use neurarm_physics::arm::ArmState;
-use neurarm_physics::config::ArmConfig;
 use neurarm::simulate::{simulate, TorqueInput};
 use neurarm::table::NumericTable;
+use neurarm_physics::arm::ArmState;
+use neurarm_physics::config::ArmConfig;
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
@@ -78,10 +78,7 @@ fn missing_column_is_named() {
 
 #[test]
 fn text_in_a_number_is_located() {
-    fails_with(
-        "time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.001,1,abc,1,1\n",
-        &["line 3", "column 3 (tau_2)", "'abc' is not a number"],
-    );
+    fails_with("time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.001,1,abc,1,1\n", &["line 3", "column 3 (tau_2)", "'abc' is not a number"]);
 }
 
 #[test]
@@ -94,10 +91,7 @@ fn nan_is_located() {
 
 #[test]
 fn non_monotonic_time_is_located() {
-    fails_with(
-        "time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.002,1,1,1,1\n0.001,1,1,1,1\n",
-        &["line 4", "column 1 (time)", "must increase"],
-    );
+    fails_with("time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0.002,1,1,1,1\n0.001,1,1,1,1\n", &["line 4", "column 1 (time)", "must increase"]);
     fails_with("time,tau_1,tau_2,tau_3,tau_4\n0,1,1,1,1\n0,1,1,1,1\n", &["line 3", "column 1 (time)"]);
 }
 
@@ -202,7 +196,13 @@ fn train_and_eval_round_trip_and_report_bad_data() {
     }
     let data = write(dir.path(), "pairs.csv", &csv);
     let net = dir.path().join("net.json");
-    let o = neurarm().args(["train", "-d"]).arg(&data).args(["--inputs", "qd_1", "--targets", "tau_1", "--hidden", "6", "-o"]).arg(&net).output().unwrap();
+    let o = neurarm()
+        .args(["train", "-d"])
+        .arg(&data)
+        .args(["--inputs", "qd_1", "--targets", "tau_1", "--hidden", "6", "-o"])
+        .arg(&net)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let weights = neurarm_physics::nn::WeightsFile::read(&net).unwrap();
     assert_eq!(weights.inputs[0].unit, "rad/s");

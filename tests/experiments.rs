@@ -2,9 +2,9 @@
 //! period of tracking): it runs, writes its outputs, and its quality figures hold.
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
-use neurarm_physics::arm::JointFriction;
-use neurarm::experiments::{paper::run_paper, Settings};
 use fmi2_cosim::SystemSpec;
+use neurarm::experiments::{paper::run_paper, Settings};
+use neurarm_physics::arm::JointFriction;
 
 #[test]
 fn the_quick_paper_run_reproduces_the_papers_findings() {
@@ -21,12 +21,29 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
     // angles (measured 0.39 N·m; a diagonal PD hold gave 2.7 N·m here).
     assert!(r.gravity_pair_error < 0.5, "gravity pairs off by up to {} N·m", r.gravity_pair_error);
 
-    for f in ["report.md", "fmu/PlanarArm.fmu", "fmu/NnCompensator.fmu", "fmu/TaskSpaceController.fmu", "nets/gravity.json", "data/gravity_pairs.csv", "data/tracking_sim_nn.csv"] {
+    for f in [
+        "report.md",
+        "fmu/PlanarArm.fmu",
+        "fmu/NnCompensator.fmu",
+        "fmu/TaskSpaceController.fmu",
+        "nets/gravity.json",
+        "data/gravity_pairs.csv",
+        "data/tracking_sim_nn.csv",
+    ] {
         assert!(out.path().join(f).is_file(), "{f} written");
     }
     // Every closed loop as a system file and an SSP archive; the system file reruns the
     // recorded run exactly (tests/python/test_closed_loops.py reruns it without our master).
-    for name in ["tracking_sim_perfect", "tracking_sim_nn", "tracking_sim_none", "tracking_real_nn", "tracking_real_none", "joint_ideal", "joint_nn", "joint_none"] {
+    for name in [
+        "tracking_sim_perfect",
+        "tracking_sim_nn",
+        "tracking_sim_none",
+        "tracking_real_nn",
+        "tracking_real_none",
+        "joint_ideal",
+        "joint_nn",
+        "joint_none",
+    ] {
         assert!(out.path().join(format!("{name}.ssp")).is_file(), "{name}.ssp written");
         let path = out.path().join(format!("systems/{name}.toml"));
         let spec = SystemSpec::from_toml(&std::fs::read_to_string(&path).unwrap(), name).unwrap();
@@ -72,7 +89,7 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
 /// on 10 000 random configurations stays under 1 % of the largest gravity torque per joint.
 #[test]
 fn the_full_gravity_identification_is_within_one_percent() {
-    use neurarm::experiments::{build_fmus, gravity_grid, gravity_sweep, parallel, paper::gravity_net_errors, train_gravity_net};
+    use neurarm::experiments::{build_fmus, gravity_grid, gravity_sweep, paper::gravity_net_errors, parallel, train_gravity_net};
     let dir = tempfile::tempdir().unwrap();
     let settings = Settings { threads: 2, ..Settings::paper() };
     let fmus = build_fmus(dir.path()).unwrap();

@@ -177,6 +177,7 @@ record = ["int.y"]
 fn bad_system_files_are_refused_with_the_reason() {
     let e = SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\n[simulation]\nstop = 1\nstep = -1\n", "s.toml").unwrap_err();
     assert!(e.contains("s.toml") && e.contains("positive step"), "{e}");
-    let e = SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\nspeed = 3\n[simulation]\nstop = 1\nstep = 1\n", "s.toml").unwrap_err();
+    let e =
+        SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\nspeed = 3\n[simulation]\nstop = 1\nstep = 1\n", "s.toml").unwrap_err();
     assert!(e.contains("speed"), "{e}");
 }

@@ -4,9 +4,9 @@
 
 use std::path::Path;
 
-use neurarm_physics::config::ArmConfig;
 use fmi2_export::description::Causality;
 use neurarm_models::FmuSpec;
+use neurarm_physics::config::ArmConfig;
 
 fn check(name: &str, spec: FmuSpec) {
     let xml = spec.description().unwrap().to_xml();
@@ -32,16 +32,13 @@ fn planar_arm_model_description_has_not_drifted() {
 fn model_structure_indices_are_one_based_positions_of_outputs() {
     let d = FmuSpec::planar_arm("PlanarArm", ArmConfig::default()).description().unwrap();
     let xml = d.to_xml();
-    let outputs: Vec<usize> = d.variables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, _)| i + 1).collect();
+    let outputs: Vec<usize> =
+        d.variables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, _)| i + 1).collect();
     assert_eq!(outputs.len(), 4 + 4 + 4 + 8);
     // Read the Outputs section back and compare with the table.
     let start = xml.find("<Outputs>").unwrap();
     let end = xml.find("</Outputs>").unwrap();
-    let indices: Vec<usize> = xml[start..end]
-        .split("index=\"")
-        .skip(1)
-        .map(|s| s[..s.find('"').unwrap()].parse().unwrap())
-        .collect();
+    let indices: Vec<usize> = xml[start..end].split("index=\"").skip(1).map(|s| s[..s.find('"').unwrap()].parse().unwrap()).collect();
     assert_eq!(indices, outputs);
     assert_eq!(d.variables[outputs[0] - 1].name, "q_1");
     // The arm has no direct feedthrough: torques act through the state.
@@ -101,7 +98,13 @@ fn nn_compensator_model_description_has_not_drifted() {
     std::fs::write(dir.path().join("gravity.json"), fixed_weights(4, 5, 4, ("q", "tau")).to_json()).unwrap();
     let spec = FmuSpec {
         identifier: "NnCompensator".into(),
-        model: ModelSpec::NnCompensator(NnCompensatorSpec { joints: 4, friction, gravity: Some("gravity.json".into()), enable_friction: true, enable_gravity: true }),
+        model: ModelSpec::NnCompensator(NnCompensatorSpec {
+            joints: 4,
+            friction,
+            gravity: Some("gravity.json".into()),
+            enable_friction: true,
+            enable_gravity: true,
+        }),
     };
     let xml = spec.build_from(Some(dir.path())).unwrap().description().to_xml();
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription").join("NnCompensator.xml");

@@ -17,7 +17,11 @@ fn fmu(dir: &Path, identifier: &str, model: ModelSpec) -> PathBuf {
 }
 
 fn entry(name: &str, path: &str, parameters: &[(&str, Value)]) -> FmuEntry {
-    FmuEntry { name: name.into(), path: path.into(), parameters: parameters.iter().map(|(k, v)| (k.to_string(), v.clone())).collect::<BTreeMap<_, _>>() }
+    FmuEntry {
+        name: name.into(),
+        path: path.into(),
+        parameters: parameters.iter().map(|(k, v)| (k.to_string(), v.clone())).collect::<BTreeMap<_, _>>(),
+    }
 }
 
 fn connection(from: &str, to: &str) -> ConnectionSpec {
@@ -117,7 +121,10 @@ fn shared_fmus_are_copied_once_and_text_is_escaped() {
     assert_eq!(names(&mut archive), ["SystemStructure.ssd", "resources/Gain.fmu", "resources/Integrator.fmu"]);
     let mut ssd = String::new();
     archive.by_name("SystemStructure.ssd").unwrap().read_to_string(&mut ssd).unwrap();
-    assert!(ssd.contains(r#"<ssd:Component name="a&amp;b" type="application/x-fmu-sharedlibrary" source="resources/Integrator.fmu""#), "{ssd}");
+    assert!(
+        ssd.contains(r#"<ssd:Component name="a&amp;b" type="application/x-fmu-sharedlibrary" source="resources/Integrator.fmu""#),
+        "{ssd}"
+    );
     assert!(ssd.contains(r#"endElement="a&amp;b" endConnector="u""#), "{ssd}");
 }
 

@@ -6,16 +6,17 @@ mod common;
 use std::path::PathBuf;
 use std::process::Command;
 
+use neurarm_models::FmuSpec;
 use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
-use neurarm_models::FmuSpec;
 
 fn compile_host(dir: &std::path::Path) -> PathBuf {
     let triple = format!("{}-unknown-linux-gnu", std::env::consts::ARCH);
     let compiler = cc::Build::new().target(&triple).host(&triple).opt_level(1).cargo_metadata(false).warnings(true).get_compiler();
     let exe = dir.join("host");
     let source = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/c/host.c");
-    let out = compiler.to_command().args(["-Wall", "-Werror", "-g", source, "-o"]).arg(&exe).arg("-ldl").output().expect("run the C compiler");
+    let out =
+        compiler.to_command().args(["-Wall", "-Werror", "-g", source, "-o"]).arg(&exe).arg("-ldl").output().expect("run the C compiler");
     assert!(out.status.success(), "C compile failed: {}", String::from_utf8_lossy(&out.stderr));
     exe
 }

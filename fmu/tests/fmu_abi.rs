@@ -6,8 +6,8 @@ mod common;
 use std::ffi::{c_int, CString};
 
 use common::*;
-use neurarm_physics::config::ArmConfig;
 use neurarm_models::FmuSpec;
+use neurarm_physics::config::ArmConfig;
 
 fn arm_fmu() -> Fmu {
     Fmu::new(&FmuSpec::planar_arm("PlanarArm", ArmConfig::default()))
@@ -99,20 +99,32 @@ fn illegal_call_table() {
         ("fmi2DoStep", vec![StepComplete], Box::new(|i| i.step(0.0, 1e-3))),
         ("fmi2GetReal", vec![Initialization, StepComplete, Terminated, Error], Box::new(move |i| i.get_real(&[q]).err().unwrap_or(OK))),
         ("fmi2SetReal", vec![Instantiated, Initialization, StepComplete], Box::new(move |i| i.set_real(&[tau], &[1.0]))),
-        ("fmi2GetRealStatus", vec![StepComplete, Terminated], Box::new(|i| unsafe {
-            let mut t = 0.0;
-            (i.api.fmi2GetRealStatus)(i.c, 2, &mut t)
-        })),
-        ("fmi2GetBooleanStatus", vec![StepComplete, Terminated], Box::new(|i| unsafe {
-            let mut b = 7;
-            (i.api.fmi2GetBooleanStatus)(i.c, 3, &mut b)
-        })),
-        ("fmi2GetFMUstate", PHASES.to_vec(), Box::new(|i| unsafe {
-            let mut s = std::ptr::null_mut();
-            let r = (i.api.fmi2GetFMUstate)(i.c, &mut s);
-            (i.api.fmi2FreeFMUstate)(i.c, &mut s);
-            r
-        })),
+        (
+            "fmi2GetRealStatus",
+            vec![StepComplete, Terminated],
+            Box::new(|i| unsafe {
+                let mut t = 0.0;
+                (i.api.fmi2GetRealStatus)(i.c, 2, &mut t)
+            }),
+        ),
+        (
+            "fmi2GetBooleanStatus",
+            vec![StepComplete, Terminated],
+            Box::new(|i| unsafe {
+                let mut b = 7;
+                (i.api.fmi2GetBooleanStatus)(i.c, 3, &mut b)
+            }),
+        ),
+        (
+            "fmi2GetFMUstate",
+            PHASES.to_vec(),
+            Box::new(|i| unsafe {
+                let mut s = std::ptr::null_mut();
+                let r = (i.api.fmi2GetFMUstate)(i.c, &mut s);
+                (i.api.fmi2FreeFMUstate)(i.c, &mut s);
+                r
+            }),
+        ),
         ("fmi2SetDebugLogging", PHASES.to_vec(), Box::new(|i| unsafe { (i.api.fmi2SetDebugLogging)(i.c, 1, 0, std::ptr::null()) })),
         ("fmi2Reset", PHASES.to_vec(), Box::new(|i| i.reset())),
     ];
@@ -127,7 +139,10 @@ fn illegal_call_table() {
                 assert_eq!(status, ERROR, "{name} in {phase:?} should be refused");
                 let log = i.log.take();
                 assert!(
-                    log.iter().any(|(s, cat, m)| *s == ERROR && cat == "logStatusError" && m.contains(name) && m.contains("illegal call sequence")),
+                    log.iter().any(|(s, cat, m)| *s == ERROR
+                        && cat == "logStatusError"
+                        && m.contains(name)
+                        && m.contains("illegal call sequence")),
                     "{name} in {phase:?}: log {log:?}"
                 );
                 still_works(&fmu, &i, phase);
@@ -201,7 +216,13 @@ fn instantiate_rejects_bad_arguments_with_a_logged_reason() {
     let api = &fmu.api;
     unsafe {
         assert!((api.fmi2Instantiate)(name.as_ptr(), 1, g.as_ptr(), u.as_ptr(), std::ptr::null(), 0, 0).is_null());
-        let no_logger = Callbacks { logger: None, allocate: std::ptr::null(), free: std::ptr::null(), step_finished: std::ptr::null(), environment: std::ptr::null_mut() };
+        let no_logger = Callbacks {
+            logger: None,
+            allocate: std::ptr::null(),
+            free: std::ptr::null(),
+            step_finished: std::ptr::null(),
+            environment: std::ptr::null_mut(),
+        };
         assert!((api.fmi2Instantiate)(name.as_ptr(), 1, g.as_ptr(), u.as_ptr(), &no_logger, 0, 0).is_null());
         log.take();
         assert!((api.fmi2Instantiate)(std::ptr::null(), 1, g.as_ptr(), u.as_ptr(), &*cb, 0, 0).is_null());
@@ -303,7 +324,8 @@ fn debug_logging_categories_switch_call_traces() {
 }
 
 fn outputs(fmu: &Fmu, i: &Instance) -> Vec<f64> {
-    let vrs: Vec<u32> = ["q_1", "q_2", "q_3", "q_4", "qd_1", "qd_2", "qd_3", "qd_4", "x", "y", "xd", "yd"].iter().map(|n| fmu.vr(n)).collect();
+    let vrs: Vec<u32> =
+        ["q_1", "q_2", "q_3", "q_4", "qd_1", "qd_2", "qd_3", "qd_4", "x", "y", "xd", "yd"].iter().map(|n| fmu.vr(n)).collect();
     i.get_real(&vrs).unwrap()
 }
 

@@ -12,12 +12,14 @@ use std::sync::Mutex;
 
 use nalgebra::{DMatrix, Vector2};
 
+use crate::export::export_fmu;
+use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, Simulation, SimulationSpec, System, SystemSpec, Value};
+use neurarm_models::{
+    FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
+};
 use neurarm_physics::arm::{inverse_dynamics_rnea, jacobian, mass_matrix, ArmParams, FrictionBranch, JointFriction};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{inverse_kinematics, paper_reference, pseudo_inverse, TaskSpaceGains};
-use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, SimulationSpec, Simulation, System, SystemSpec, Value};
-use crate::export::export_fmu;
-use neurarm_models::{FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
 
 /// Centre of the task-space reference [m]: the curve spans x ∈ c_x ± 0.35, y ∈ c_y − 0.30 …
@@ -103,8 +105,20 @@ pub fn emulated_real_arm() -> ArmConfig {
         let nominal = JointFriction::default_for_joint(i);
         let (fc, b) = (nominal.positive.coulomb_nm, nominal.positive.viscous_nms_rad);
         let falloff = if i == 1 || i == 2 { Some(2.0) } else { None };
-        f.positive = FrictionBranch { coulomb_nm: 1.1 * fc, static_nm: 1.4 * fc, stribeck_velocity_rad_s: 0.1, viscous_nms_rad: 1.2 * b, viscous_falloff_rad_s: falloff };
-        f.negative = FrictionBranch { coulomb_nm: 0.8 * fc, static_nm: 1.1 * fc, stribeck_velocity_rad_s: 0.15, viscous_nms_rad: 0.9 * b, viscous_falloff_rad_s: falloff };
+        f.positive = FrictionBranch {
+            coulomb_nm: 1.1 * fc,
+            static_nm: 1.4 * fc,
+            stribeck_velocity_rad_s: 0.1,
+            viscous_nms_rad: 1.2 * b,
+            viscous_falloff_rad_s: falloff,
+        };
+        f.negative = FrictionBranch {
+            coulomb_nm: 0.8 * fc,
+            static_nm: 1.1 * fc,
+            stribeck_velocity_rad_s: 0.15,
+            viscous_nms_rad: 0.9 * b,
+            viscous_falloff_rad_s: falloff,
+        };
     }
     c.hardware.q_noise_std_rad = 5e-4;
     c.hardware.qd_noise_std_rad_s = 0.02;
@@ -145,16 +159,34 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
     let (centre, (q_start, _)) = tracking_start(&nominal.arm)?;
     Ok(Fmus {
         arm: export("PlanarArm", ModelSpec::PlanarArm(PlanarArmSpec { config: nominal.clone(), q0: vec![0.0; 4], qd0: vec![0.0; 4] }))?,
-        arm_real: export("PlanarArmReal", ModelSpec::PlanarArm(PlanarArmSpec { config: emulated_real_arm(), q0: vec![0.0; 4], qd0: vec![0.0; 4] }))?,
+        arm_real: export(
+            "PlanarArmReal",
+            ModelSpec::PlanarArm(PlanarArmSpec { config: emulated_real_arm(), q0: vec![0.0; 4], qd0: vec![0.0; 4] }),
+        )?,
         task_controller: export(
             "TaskSpaceController",
-            ModelSpec::TaskSpaceController(TaskSpaceControllerSpec { model: nominal.arm.clone().frictionless(), gains: TaskSpaceGains::default(), centre, q_start }),
+            ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
+                model: nominal.arm.clone().frictionless(),
+                gains: TaskSpaceGains::default(),
+                centre,
+                q_start,
+            }),
         )?,
-        joint_controller: export("JointController", ModelSpec::JointController(JointControllerSpec { joints: 4, kp: 50.0, kd: 0.0, use_sequence: true }))?,
-        ideal_friction: export("IdealFrictionCompensator", ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: nominal.arm.clone(), enable_friction: true, enable_gravity: false }))?,
+        joint_controller: export(
+            "JointController",
+            ModelSpec::JointController(JointControllerSpec { joints: 4, kp: 50.0, kd: 0.0, use_sequence: true }),
+        )?,
+        ideal_friction: export(
+            "IdealFrictionCompensator",
+            ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: nominal.arm.clone(), enable_friction: true, enable_gravity: false }),
+        )?,
         ideal_gravity: export(
             "IdealGravityCompensator",
-            ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: nominal.arm.clone().with_base_angle(PI / 2.0), enable_friction: false, enable_gravity: true }),
+            ModelSpec::IdealCompensator(IdealCompensatorSpec {
+                arm: nominal.arm.clone().with_base_angle(PI / 2.0),
+                enable_friction: false,
+                enable_gravity: true,
+            }),
         )?,
     })
 }
@@ -177,7 +209,12 @@ fn master(e: MasterError) -> String {
 
 /// Runs `tasks` on `threads` workers; results come back in task order. `done` is called
 /// after each task.
-pub fn parallel<T: Send, R: Send>(tasks: Vec<T>, threads: usize, work: impl Fn(T) -> Result<R, String> + Sync, done: impl Fn() + Sync) -> Result<Vec<R>, String> {
+pub fn parallel<T: Send, R: Send>(
+    tasks: Vec<T>,
+    threads: usize,
+    work: impl Fn(T) -> Result<R, String> + Sync,
+    done: impl Fn() + Sync,
+) -> Result<Vec<R>, String> {
     let n = tasks.len();
     let queue: Mutex<Vec<(usize, T)>> = Mutex::new(tasks.into_iter().enumerate().rev().collect());
     let results: Mutex<Vec<Option<Result<R, String>>>> = Mutex::new((0..n).map(|_| None).collect());
@@ -242,7 +279,6 @@ pub fn rest_pair(runs: &[&FrictionRun]) -> Option<(f64, f64, usize)> {
     Some((0.0, 0.5 * (up.breakaway.0 + down.breakaway.0), up.breakaway.1 + down.breakaway.1))
 }
 
-
 /// Gains of the joint PD loops of the identification experiments: critically damped at
 /// 40 rad/s for the smallest inertia each joint can present, 1/(H⁻¹)_ii over poses on a grid
 /// (the other joints' coupling makes it much smaller than H_ii), so the sampled loop stays
@@ -264,7 +300,13 @@ fn hold_gains(arm: &ArmParams) -> Vec<(f64, f64)> {
     inertia.iter().map(|m| (m * w * w, 2.0 * zeta * m * w)).collect()
 }
 
-fn joint_loop(arm_fmu: &Path, controller: &Path, arm_parameters: &[(&str, Value)], kp_kd: &[(f64, f64)], compensator: Option<&Path>) -> Result<System, String> {
+fn joint_loop(
+    arm_fmu: &Path,
+    controller: &Path,
+    arm_parameters: &[(&str, Value)],
+    kp_kd: &[(f64, f64)],
+    compensator: Option<&Path>,
+) -> Result<System, String> {
     let mut s = System::new();
     s.add_fmu("arm", arm_fmu).map_err(master)?.add_fmu("ctl", controller).map_err(master)?;
     for (name, v) in arm_parameters {
@@ -377,7 +419,8 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
     const STARTS: u64 = 10;
     let mut best: Option<(f64, TrainSettings, neurarm_physics::nn::Trained)> = None;
     for start in 0..STARTS {
-        let mut settings = TrainSettings { hidden: 10, restarts: 1, max_fail: 20, seed: seed + joint as u64 + 7919 * start, ..TrainSettings::default() };
+        let mut settings =
+            TrainSettings { hidden: 10, restarts: 1, max_fail: 20, seed: seed + joint as u64 + 7919 * start, ..TrainSettings::default() };
         // The pair at rest is the only one in the stick band: keep it in the training part
         // (the first split seed from there that does), or the jump lands anywhere in the band.
         if let Some(rest) = pairs.iter().position(|p| p.0 == 0.0) {
@@ -449,7 +492,12 @@ const SWEEP_SPEED: f64 = GRAVITY_SWEEP_SPEED_RAD_S;
 /// diagonal PD cannot do this: tuned for the lightest pose it is underdamped in the heavy ones
 /// and its oscillation put errors of up to 7 N·m into the pairs. The speed is 0.25 rad/s:
 /// Coriolis and centrifugal torques grow with its square and do not cancel between passes.
-pub fn gravity_sweep(arm_fmu: &Path, controller: &Path, points: &[Vec<f64>], settings: &Settings) -> Result<(Vec<GravityPair>, f64), String> {
+pub fn gravity_sweep(
+    arm_fmu: &Path,
+    controller: &Path,
+    points: &[Vec<f64>],
+    settings: &Settings,
+) -> Result<(Vec<GravityPair>, f64), String> {
     const PASS_S: f64 = 0.4;
     const HOLD_RAD_S: f64 = 40.0;
     let arm = ArmConfig::default().arm;
@@ -458,7 +506,8 @@ pub fn gravity_sweep(arm_fmu: &Path, controller: &Path, points: &[Vec<f64>], set
     let rigid_body = arm.clone().frictionless();
     let offset = SWEEP_SPEED * PASS_S / 2.0;
     let first: Vec<f64> = points[0].iter().map(|q| q - offset).collect();
-    let mut parameters: Vec<(String, Value)> = vec![("base_angle".into(), Value::Real(PI / 2.0)), ("internal_step".into(), Value::Real(IDENTIFICATION_INTERNAL_STEP_S))];
+    let mut parameters: Vec<(String, Value)> =
+        vec![("base_angle".into(), Value::Real(PI / 2.0)), ("internal_step".into(), Value::Real(IDENTIFICATION_INTERNAL_STEP_S))];
     for (i, q) in first.iter().enumerate() {
         parameters.push((format!("q0_{}", i + 1), Value::Real(*q)));
     }
@@ -466,10 +515,15 @@ pub fn gravity_sweep(arm_fmu: &Path, controller: &Path, points: &[Vec<f64>], set
     let mut s = joint_loop(arm_fmu, controller, &p, &vec![(0.0, 0.0); n], None)?;
     s.set("ctl", "use_sequence", Value::Boolean(false)).map_err(master)?;
     let mut sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[]).map_err(master)?;
-    let handles = |sim: &Simulation, f: &dyn Fn(usize) -> String| -> Result<Vec<Handle>, String> { (0..n).map(|i| sim.real_handle(&f(i)).map_err(master)).collect() };
-    let reference: Vec<Handle> = [handles(&sim, &|i| format!("ctl.q_ref_{}", i + 1))?, handles(&sim, &|i| format!("ctl.qd_ref_{}", i + 1))?].concat();
-    let measured: Vec<Handle> = [handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?, handles(&sim, &|i| format!("ctl.tau_{}", i + 1))?].concat();
-    let state: Vec<Handle> = [handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?, handles(&sim, &|i| format!("arm.qd_meas_{}", i + 1))?].concat();
+    let handles = |sim: &Simulation, f: &dyn Fn(usize) -> String| -> Result<Vec<Handle>, String> {
+        (0..n).map(|i| sim.real_handle(&f(i)).map_err(master)).collect()
+    };
+    let reference: Vec<Handle> =
+        [handles(&sim, &|i| format!("ctl.q_ref_{}", i + 1))?, handles(&sim, &|i| format!("ctl.qd_ref_{}", i + 1))?].concat();
+    let measured: Vec<Handle> =
+        [handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?, handles(&sim, &|i| format!("ctl.tau_{}", i + 1))?].concat();
+    let state: Vec<Handle> =
+        [handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?, handles(&sim, &|i| format!("arm.qd_meas_{}", i + 1))?].concat();
     let hold_torque = handles(&sim, &|i| format!("ctl.tau_comp_{}", i + 1))?;
     let mut x = vec![0.0; 2 * n];
     let mut u = vec![0.0; n];
@@ -546,7 +600,14 @@ pub fn train_gravity_net(pairs: &[GravityPair], settings: &Settings, on_epoch: &
     let n = pairs[0].0.len();
     let x = DMatrix::from_fn(n, pairs.len(), |r, c| pairs[c].0[r]);
     let t = DMatrix::from_fn(n, pairs.len(), |r, c| pairs[c].1[r]);
-    let train_settings = TrainSettings { hidden: settings.gravity_hidden, epochs: settings.gravity_epochs, max_fail: 20, restarts: 3, seed: settings.seed + 1, ..TrainSettings::default() };
+    let train_settings = TrainSettings {
+        hidden: settings.gravity_hidden,
+        epochs: settings.gravity_epochs,
+        max_fail: 20,
+        restarts: 3,
+        seed: settings.seed + 1,
+        ..TrainSettings::default()
+    };
     let trained = train(&x, &t, &train_settings, &mut |e| on_epoch(e.epoch)).map_err(|e| format!("gravity net: {e}"))?;
     let signals = |prefix: &str, unit: &str| (0..n).map(|i| Signal { name: format!("{prefix}_{}", i + 1), unit: unit.into() }).collect();
     Ok(WeightsFile::new(&trained.net, signals("q", "rad"), signals("tau_gravity", "N.m"), train_settings, trained.report))
@@ -580,7 +641,13 @@ fn spec_path(p: &Path) -> String {
 /// The units and connections every closed loop shares: `arm` measured by the controller
 /// `ctl`, whose torques drive the arm; with a compensator `comp`, fed the same measurements,
 /// adding `tau_comp` in the controller. Paths as the system file will hold them.
-fn closed_loop(arm: &Path, controller: &Path, compensator: Option<&Path>, arm_parameters: BTreeMap<String, Value>, controller_parameters: BTreeMap<String, Value>) -> SystemSpec {
+fn closed_loop(
+    arm: &Path,
+    controller: &Path,
+    compensator: Option<&Path>,
+    arm_parameters: BTreeMap<String, Value>,
+    controller_parameters: BTreeMap<String, Value>,
+) -> SystemSpec {
     let connect = |from: &str, to: &str| ConnectionSpec { from: from.into(), to: to.into() };
     let mut fmu = vec![
         FmuEntry { name: "arm".into(), path: spec_path(arm), parameters: arm_parameters },
@@ -589,12 +656,23 @@ fn closed_loop(arm: &Path, controller: &Path, compensator: Option<&Path>, arm_pa
     let mut connection = vec![connect("arm.q_meas_*", "ctl.q_*"), connect("arm.qd_meas_*", "ctl.qd_*"), connect("ctl.tau_*", "arm.tau_*")];
     if let Some(c) = compensator {
         fmu.push(FmuEntry { name: "comp".into(), path: spec_path(c), parameters: BTreeMap::new() });
-        connection.extend([connect("arm.q_meas_*", "comp.q_*"), connect("arm.qd_meas_*", "comp.qd_*"), connect("comp.tau_comp_*", "ctl.tau_comp_*")]);
+        connection.extend([
+            connect("arm.q_meas_*", "comp.q_*"),
+            connect("arm.qd_meas_*", "comp.qd_*"),
+            connect("comp.tau_comp_*", "ctl.tau_comp_*"),
+        ]);
     }
     SystemSpec {
         fmu,
         connection,
-        simulation: SimulationSpec { start: 0.0, stop: 0.0, step: 0.0, algorithm: Algorithm::GaussSeidel, record: Vec::new(), record_every: 1 },
+        simulation: SimulationSpec {
+            start: 0.0,
+            stop: 0.0,
+            step: 0.0,
+            algorithm: Algorithm::GaussSeidel,
+            record: Vec::new(),
+            record_every: 1,
+        },
     }
 }
 
@@ -611,7 +689,8 @@ pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>
         arm_parameters.insert(format!("qd0_{}", i + 1), Value::Real(qd0[i]));
     }
     let mut spec = closed_loop(arm, controller, compensator, arm_parameters, BTreeMap::new());
-    let mut record: Vec<String> = ["ctl.error_x", "ctl.error_y", "ctl.x_ref", "ctl.y_ref", "arm.x", "arm.y"].iter().map(|s| s.to_string()).collect();
+    let mut record: Vec<String> =
+        ["ctl.error_x", "ctl.error_y", "ctl.x_ref", "ctl.y_ref", "arm.x", "arm.y"].iter().map(|s| s.to_string()).collect();
     record.extend((1..=q0.len()).map(|i| format!("arm.q_{i}")));
     record.extend((1..=q0.len()).map(|i| format!("arm.qd_{i}")));
     record.extend((1..=q0.len()).map(|i| format!("ctl.tau_{i}")));
@@ -676,12 +755,14 @@ pub fn joint_rms_errors(run: &LoopRun, joints: usize) -> Vec<f64> {
 pub fn joint_settled_errors(run: &LoopRun, joints: usize) -> Vec<f64> {
     let time = run.column("time").unwrap_or_default();
     let segment = neurarm_models::joint::SEQUENCE_SEGMENT_S;
-    let settled: Vec<bool> = time.iter().map(|t| t.rem_euclid(segment) >= segment - 0.5 || (*t > 0.0 && t.rem_euclid(segment) == 0.0)).collect();
+    let settled: Vec<bool> =
+        time.iter().map(|t| t.rem_euclid(segment) >= segment - 0.5 || (*t > 0.0 && t.rem_euclid(segment) == 0.0)).collect();
     (1..=joints)
         .map(|i| {
             let t = run.column(&format!("ctl.q_target_{i}")).unwrap_or_default();
             let q = run.column(&format!("arm.q_{i}")).unwrap_or_default();
-            let (sum, count) = t.iter().zip(&q).zip(&settled).filter(|(_, &s)| s).fold((0.0, 0usize), |(s, c), ((a, b), _)| (s + (a - b).abs(), c + 1));
+            let (sum, count) =
+                t.iter().zip(&q).zip(&settled).filter(|(_, &s)| s).fold((0.0, 0usize), |(s, c), ((a, b), _)| (s + (a - b).abs(), c + 1));
             sum / count.max(1) as f64
         })
         .collect()

@@ -8,8 +8,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rand::{Rng, SeedableRng};
 
 use super::*;
-use neurarm_physics::arm::gravity_torques;
 use crate::table::{write_atomic, write_text_atomic};
+use neurarm_physics::arm::gravity_torques;
 
 /// The paper's Table 1 [m²]: sim perfect, sim NN, sim none, real NN, real none.
 pub const PAPER_TABLE_1: [f64; 5] = [0.0014, 0.0016, 0.0248, 0.0071, 0.0291];
@@ -100,7 +100,8 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
     lap(&mut results, "building FMUs", log);
 
     // Friction identification on both arms, every joint and direction in parallel.
-    let tasks: Vec<(bool, usize, f64)> = [false, true].iter().flat_map(|&real| (0..4).flat_map(move |j| [(real, j, 1.0), (real, j, -1.0)])).collect();
+    let tasks: Vec<(bool, usize, f64)> =
+        [false, true].iter().flat_map(|&real| (0..4).flat_map(move |j| [(real, j, 1.0), (real, j, -1.0)])).collect();
     let b = bar(tasks.len() as u64, "friction identification");
     let runs = parallel(
         tasks.clone(),
@@ -152,7 +153,8 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
     let chunk = grid.len().div_ceil(settings.threads.max(1));
     let chunks: Vec<Vec<Vec<f64>>> = grid.chunks(chunk).map(|c| c.to_vec()).collect();
     let b = bar(chunks.len() as u64, "gravity identification");
-    let swept = parallel(chunks, settings.threads, |points| gravity_sweep(&fmus.arm, &fmus.joint_controller, &points, settings), || b.inc(1))?;
+    let swept =
+        parallel(chunks, settings.threads, |points| gravity_sweep(&fmus.arm, &fmus.joint_controller, &points, settings), || b.inc(1))?;
     b.finish_and_clear();
     let pairs: Vec<GravityPair> = swept.into_iter().flat_map(|(p, _)| p).collect();
     results.gravity_pairs = pairs.len();
@@ -162,7 +164,11 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
         .map(|(q, t)| gravity_torques(&vertical, q).iter().zip(t).map(|(g, t)| (g - t).abs()).fold(0.0, f64::max))
         .fold(0.0, f64::max);
     let csv = data_dir.join("gravity_pairs.csv");
-    write_rows(&csv, &["q_1", "q_2", "q_3", "q_4", "tau_1", "tau_2", "tau_3", "tau_4"], pairs.iter().map(|(q, t)| [q.clone(), t.clone()].concat()))?;
+    write_rows(
+        &csv,
+        &["q_1", "q_2", "q_3", "q_4", "tau_1", "tau_2", "tau_3", "tau_4"],
+        pairs.iter().map(|(q, t)| [q.clone(), t.clone()].concat()),
+    )?;
     lap(&mut results, "gravity identification", log);
     let b = bar(settings.gravity_epochs as u64, "gravity net (4-25-4)");
     let gravity_net = train_gravity_net(&pairs, settings, &mut |e| b.set_position(e as u64))?;
@@ -216,7 +222,10 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
     ];
     for (name, spec) in &loops {
         let toml = systems_dir.join(format!("{name}.toml"));
-        let text = format!("# The {name} loop of `neurarm paper`; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}", spec.to_toml()?);
+        let text = format!(
+            "# The {name} loop of `neurarm paper`; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
+            spec.to_toml()?
+        );
         write_text_atomic(&toml, &text).map_err(io(&toml))?;
         fmi2_cosim::ssp::write_ssp(spec, &systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
     }
@@ -258,7 +267,12 @@ pub fn report_markdown(r: &PaperResults, settings: &Settings, total_s: f64) -> S
         total_s
     );
     let _ = writeln!(s, "## Table 1: tracking error of the task-space loop\n");
-    let _ = writeln!(s, "Mean over time and both coordinates of (x_d − x)² [m²], over {:.2} s ({:.1} periods of the reference).\n", settings.tracking_duration, settings.tracking_duration / (2.0 * PI));
+    let _ = writeln!(
+        s,
+        "Mean over time and both coordinates of (x_d − x)² [m²], over {:.2} s ({:.1} periods of the reference).\n",
+        settings.tracking_duration,
+        settings.tracking_duration / (2.0 * PI)
+    );
     let _ = writeln!(s, "| average MSE | sim, perfect | sim, NN | sim, none | real, NN | real, none |");
     let _ = writeln!(s, "|---|---|---|---|---|---|");
     let _ = writeln!(s, "| paper | {} | {} | {} | {} | {} |", p[0], p[1], p[2], p[3], p[4]);
@@ -270,10 +284,13 @@ pub fn report_markdown(r: &PaperResults, settings: &Settings, total_s: f64) -> S
     let _ = writeln!(s, "| sim none / NN | {:.1} | {:.1} |", p[2] / p[1], t[2] / t[1]);
     let _ = writeln!(s, "| real NN / none | {:.2} | {:.3} |", p[3] / p[4], t[3] / t[4]);
     let _ = writeln!(s, "| real none / NN | {:.1} | {:.1} |\n", p[4] / p[3], t[4] / t[3]);
-    let _ = writeln!(s, "Absolute values differ from the paper's: its robot's parameters and run length are not published. \
+    let _ = writeln!(
+        s,
+        "Absolute values differ from the paper's: its robot's parameters and run length are not published. \
         The simulated arm starts on the reference with its velocity, so no start-up transient is counted. \
         The \"real\" arm is emulated: asymmetric friction with Stribeck break-away and (joints 2, 3) viscous friction \
-        falling with speed, measurement noise and 16-bit encoders; its NN was trained on data measured on it.\n");
+        falling with speed, measurement noise and 16-bit encoders; its NN was trained on data measured on it.\n"
+    );
     let _ = writeln!(s, "## Friction identification\n");
     let _ = writeln!(s, "Constant torques on one joint, the others held by the joint controller; steady velocity per level; \
         samples binned by {} rad/s over ±{} rad/s; mean torque per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway torques; see `rest_pair`). Data: `data/friction_*_joint*.csv`; nets: `nets/friction_*.json`.\n", settings.bin_width, settings.max_velocity);
@@ -285,18 +302,30 @@ pub fn report_markdown(r: &PaperResults, settings: &Settings, total_s: f64) -> S
         let _ = writeln!(s, "| {} | {a} | {b} | {c} | {d} |", j + 1);
     }
     let _ = writeln!(s, "\n## Gravity identification\n");
-    let _ = writeln!(s, "Base turned 90°; {}⁴ grid = {} configurations, each passed slowly up and down by all joints ({} rad/s), \
+    let _ = writeln!(
+        s,
+        "Base turned 90°; {}⁴ grid = {} configurations, each passed slowly up and down by all joints ({} rad/s), \
         torques of the two passes averaged; the joints held on the moves by an inertia-scaled PD from the gravity-free rigid-body model \
-        (see `gravity_sweep`). A 4-{}-4 net trained on them (`nets/gravity.json`).\n", settings.grid, r.gravity_pairs, GRAVITY_SWEEP_SPEED_RAD_S, settings.gravity_hidden);
+        (see `gravity_sweep`). A 4-{}-4 net trained on them (`nets/gravity.json`).\n",
+        settings.grid, r.gravity_pairs, GRAVITY_SWEEP_SPEED_RAD_S, settings.gravity_hidden
+    );
     let _ = writeln!(s, "The procedure itself, checked against the true model: the largest difference between an averaged torque and the true gravity torque at the averaged angles is {:.2e} N·m (what remains of friction, Coriolis terms and lag).\n", r.gravity_pair_error);
-    let _ = writeln!(s, "Error on {} random configurations (not grid points), as RMS per joint and as a share of the largest gravity torque ({:.2} N·m):\n", settings.gravity_test_points, r.gravity_max);
+    let _ = writeln!(
+        s,
+        "Error on {} random configurations (not grid points), as RMS per joint and as a share of the largest gravity torque ({:.2} N·m):\n",
+        settings.gravity_test_points, r.gravity_max
+    );
     let _ = writeln!(s, "| joint | RMS error [N·m] | share of max |");
     let _ = writeln!(s, "|---|---|---|");
     for (j, e) in r.gravity_rms.iter().enumerate() {
         let _ = writeln!(s, "| {} | {:.4} | {:.3} % |", j + 1, e, 100.0 * e / r.gravity_max);
     }
     let _ = writeln!(s, "\n## Gravity compensation in the joint-space loop\n");
-    let _ = writeln!(s, "τ = τ_comp + K_p (q_d − q), K_p = {} N·m/rad, K_d = {}; the built-in target sequence (5 × 3 s). RMS of q_d − q [rad]:\n", settings.joint_kp, settings.joint_kd);
+    let _ = writeln!(
+        s,
+        "τ = τ_comp + K_p (q_d − q), K_p = {} N·m/rad, K_d = {}; the built-in target sequence (5 × 3 s). RMS of q_d − q [rad]:\n",
+        settings.joint_kp, settings.joint_kd
+    );
     let _ = writeln!(s, "| compensation | joint 1 | joint 2 | joint 3 | joint 4 |");
     let _ = writeln!(s, "|---|---|---|---|---|");
     for (name, e) in ["ideal", "NN", "none"].iter().zip(&r.joint_rms) {
@@ -312,7 +341,10 @@ pub fn report_markdown(r: &PaperResults, settings: &Settings, total_s: f64) -> S
     }
     let _ = writeln!(s, "\nThe paper's K_p = 0.025 has no units; in N·m/rad it would move no joint against its Coulomb friction \
         (0.3–1.5 N·m needs an error of 12–60 rad), so this run uses {} N·m/rad, with a small K_d = {} N·m·s/rad: with P alone the loop rings for seconds after each target step (damped only by friction).\n", settings.joint_kp, settings.joint_kd);
-    let _ = writeln!(s, "## Figures\n\n![friction](friction.png)\n\n![tracking](tracking.png)\n\n![gravity compensation](gravity_compensation.png)\n");
+    let _ = writeln!(
+        s,
+        "## Figures\n\n![friction](friction.png)\n\n![tracking](tracking.png)\n\n![gravity compensation](gravity_compensation.png)\n"
+    );
     let _ = writeln!(s, "## Time per stage\n");
     for (name, secs) in &r.timings {
         let _ = writeln!(s, "- {name}: {secs:.1} s");
@@ -334,16 +366,26 @@ fn write_plots(out: &Path, binned: &[Vec<Vec<(f64, f64, usize)>>; 2], nets: &[We
                 x_label: "qd [rad/s]".into(),
                 y_label: "τ [N·m]".into(),
                 series: vec![
-                    Series { name: "binned data".into(), points: binned[k][j].iter().map(|&(v, t, _)| (v, t)).collect(), style: Style::Points },
+                    Series {
+                        name: "binned data".into(),
+                        points: binned[k][j].iter().map(|&(v, t, _)| (v, t)).collect(),
+                        style: Style::Points,
+                    },
                     Series { name: "net".into(), points: curve, style: Style::Line },
                 ],
             });
         }
     }
     write_png(&out.join("friction.png"), "Friction: identified pairs and trained nets", &panels, 4)?;
-    let xy = |r: &LoopRun, a: &str, b: &str| -> Vec<(f64, f64)> { r.column(a).unwrap_or_default().into_iter().zip(r.column(b).unwrap_or_default()).collect() };
+    let xy = |r: &LoopRun, a: &str, b: &str| -> Vec<(f64, f64)> {
+        r.column(a).unwrap_or_default().into_iter().zip(r.column(b).unwrap_or_default()).collect()
+    };
     let err = |r: &LoopRun| -> Vec<(f64, f64)> {
-        let (t, ex, ey) = (r.column("time").unwrap_or_default(), r.column("ctl.error_x").unwrap_or_default(), r.column("ctl.error_y").unwrap_or_default());
+        let (t, ex, ey) = (
+            r.column("time").unwrap_or_default(),
+            r.column("ctl.error_x").unwrap_or_default(),
+            r.column("ctl.error_y").unwrap_or_default(),
+        );
         t.iter().zip(ex.iter().zip(&ey)).map(|(t, (a, b))| (*t, 1e3 * (a * a + b * b).sqrt())).collect()
     };
     let names = ["perfect", "NN", "none", "real NN", "real none"];
@@ -353,9 +395,13 @@ fn write_plots(out: &Path, binned: &[Vec<Vec<(f64, f64, usize)>>; 2], nets: &[We
             title: "end-effector path (simulated)".into(),
             x_label: "x [m]".into(),
             y_label: "y [m]".into(),
-            series: std::iter::once(Series { name: "reference".into(), points: xy(&runs[0], "ctl.x_ref", "ctl.y_ref"), style: Style::Dashed })
-                .chain((0..3).map(|k| Series { name: names[k].into(), points: xy(&runs[k], "arm.x", "arm.y"), style: Style::Line }))
-                .collect(),
+            series: std::iter::once(Series {
+                name: "reference".into(),
+                points: xy(&runs[0], "ctl.x_ref", "ctl.y_ref"),
+                style: Style::Dashed,
+            })
+            .chain((0..3).map(|k| Series { name: names[k].into(), points: xy(&runs[k], "arm.x", "arm.y"), style: Style::Line }))
+            .collect(),
         },
         Panel {
             title: "tracking error |x_d − x|".into(),
@@ -368,10 +414,18 @@ fn write_plots(out: &Path, binned: &[Vec<Vec<(f64, f64, usize)>>; 2], nets: &[We
     let mut panels = Vec::new();
     for j in 1..=4 {
         let t = runs[5].column("time").unwrap_or_default();
-        let mut series = vec![Series { name: "target".into(), points: t.iter().copied().zip(runs[5].column(&format!("ctl.q_target_{j}")).unwrap_or_default()).collect(), style: Style::Dashed }];
+        let mut series = vec![Series {
+            name: "target".into(),
+            points: t.iter().copied().zip(runs[5].column(&format!("ctl.q_target_{j}")).unwrap_or_default()).collect(),
+            style: Style::Dashed,
+        }];
         for (k, name) in ["ideal", "NN", "none"].iter().enumerate() {
             let r = &runs[5 + k];
-            series.push(Series { name: (*name).into(), points: r.column("time").unwrap_or_default().into_iter().zip(r.column(&format!("arm.q_{j}")).unwrap_or_default()).collect(), style: Style::Line });
+            series.push(Series {
+                name: (*name).into(),
+                points: r.column("time").unwrap_or_default().into_iter().zip(r.column(&format!("arm.q_{j}")).unwrap_or_default()).collect(),
+                style: Style::Line,
+            });
         }
         panels.push(Panel { title: format!("joint {j}"), x_label: "t [s]".into(), y_label: "q [rad]".into(), series });
     }

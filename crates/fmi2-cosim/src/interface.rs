@@ -286,7 +286,8 @@ mod tests {
     fn other_versions_and_model_exchange_are_refused() {
         let e = Interface::parse(&XML.replace(r#"fmiVersion="2.0""#, r#"fmiVersion="3.0""#)).unwrap_err();
         assert!(e.contains("only FMI 2.0"), "{e}");
-        let e = Interface::parse(&XML.replace(r#"<CoSimulation modelIdentifier="M"/>"#, r#"<ModelExchange modelIdentifier="M"/>"#)).unwrap_err();
+        let e = Interface::parse(&XML.replace(r#"<CoSimulation modelIdentifier="M"/>"#, r#"<ModelExchange modelIdentifier="M"/>"#))
+            .unwrap_err();
         assert!(e.contains("not a Co-Simulation FMU"), "{e}");
         let e = Interface::parse(&XML.replace(r#"name="w""#, r#"name="u""#)).unwrap_err();
         assert!(e.contains("two variables are named 'u'"), "{e}");

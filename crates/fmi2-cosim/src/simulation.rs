@@ -102,7 +102,8 @@ impl Simulation {
             Value::Integer(i) => unit.instance.set_integer(&vr, &[*i as i32]).map(|_| ()),
             Value::Boolean(b) => unit.instance.set_boolean(&vr, &[*b as i32]).map(|_| ()),
             Value::String(s) => {
-                let c = std::ffi::CString::new(s.as_str()).map_err(|_| MasterError::new("a string holds a NUL byte").unit(&unit.name).variable(name))?;
+                let c = std::ffi::CString::new(s.as_str())
+                    .map_err(|_| MasterError::new("a string holds a NUL byte").unit(&unit.name).variable(name))?;
                 unit.instance.set_string(&vr, &[c])
             }
         };
@@ -131,13 +132,22 @@ impl Simulation {
             let mark = capture::mark();
             let (nr, ni, nb) = (plan.out_real[u].len(), plan.out_int[u].len(), plan.out_bool[u].len());
             if nr > 0 {
-                units[u].instance.get_real(&plan.out_real[u], &mut plan.buf_real[..nr]).map_err(|e| units[u].fail("fmi2GetReal", e, mark, time))?;
+                units[u]
+                    .instance
+                    .get_real(&plan.out_real[u], &mut plan.buf_real[..nr])
+                    .map_err(|e| units[u].fail("fmi2GetReal", e, mark, time))?;
             }
             if ni > 0 {
-                units[u].instance.get_integer(&plan.out_int[u], &mut plan.buf_int[..ni]).map_err(|e| units[u].fail("fmi2GetInteger", e, mark, time))?;
+                units[u]
+                    .instance
+                    .get_integer(&plan.out_int[u], &mut plan.buf_int[..ni])
+                    .map_err(|e| units[u].fail("fmi2GetInteger", e, mark, time))?;
             }
             if nb > 0 {
-                units[u].instance.get_boolean(&plan.out_bool[u], &mut plan.buf_bool[..nb]).map_err(|e| units[u].fail("fmi2GetBoolean", e, mark, time))?;
+                units[u]
+                    .instance
+                    .get_boolean(&plan.out_bool[u], &mut plan.buf_bool[..nb])
+                    .map_err(|e| units[u].fail("fmi2GetBoolean", e, mark, time))?;
             }
             for t in &plan.transfers[u] {
                 let m = t.vrs.len();

@@ -125,7 +125,10 @@ impl SimulationSpec {
         if valid {
             Ok(())
         } else {
-            Err(format!("[simulation] needs a positive step and stop ≥ start (got start {}, stop {}, step {})", self.start, self.stop, self.step))
+            Err(format!(
+                "[simulation] needs a positive step and stop ≥ start (got start {}, stop {}, step {})",
+                self.start, self.stop, self.step
+            ))
         }
     }
 }

@@ -110,7 +110,8 @@ pub fn expand_connection<'a>(
 ) -> Result<Vec<(String, String)>, String> {
     match (from_var.split_once('*'), to_var.split_once('*')) {
         (Some((fp, fs)), Some((tp, ts))) => {
-            let mut names: Vec<&str> = outputs.into_iter().filter(|n| n.len() >= fp.len() + fs.len() && n.starts_with(fp) && n.ends_with(fs)).collect();
+            let mut names: Vec<&str> =
+                outputs.into_iter().filter(|n| n.len() >= fp.len() + fs.len() && n.starts_with(fp) && n.ends_with(fs)).collect();
             names.sort_unstable();
             names.dedup();
             if names.is_empty() {
@@ -276,7 +277,10 @@ mod tests {
     fn wildcards_expand_to_sorted_pairs() {
         let outputs = ["q_1", "q_2", "qd_1", "tau_1", "q_"];
         let pairs = expand_connection("a.q_*", "b.x_*_in", "q_*", "x_*_in", outputs).unwrap();
-        assert_eq!(pairs, [("q_".to_owned(), "x__in".to_owned()), ("q_1".to_owned(), "x_1_in".to_owned()), ("q_2".to_owned(), "x_2_in".to_owned())]);
+        assert_eq!(
+            pairs,
+            [("q_".to_owned(), "x__in".to_owned()), ("q_1".to_owned(), "x_1_in".to_owned()), ("q_2".to_owned(), "x_2_in".to_owned())]
+        );
         let e = expand_connection("a.z*", "b.z*", "z*", "z*", outputs).unwrap_err();
         assert!(e.contains("no output matches 'z*'"), "{e}");
         let e = expand_connection("a.q_*", "b.u", "q_*", "u", outputs).unwrap_err();

@@ -168,7 +168,8 @@ pub unsafe fn instantiate(
     let Some(functions) = (unsafe { functions.as_ref() }) else { return std::ptr::null_mut() };
     let Some(logger) = functions.logger else { return std::ptr::null_mut() };
     let name = unsafe { str_arg(instance_name) }.unwrap_or("");
-    let host = |name: &str| HostLogger { logger, environment: functions.component_environment, name: CString::new(name).unwrap_or_default() };
+    let host =
+        |name: &str| HostLogger { logger, environment: functions.component_environment, name: CString::new(name).unwrap_or_default() };
     let fail = |message: String| {
         host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
         std::ptr::null_mut()
@@ -507,10 +508,7 @@ pub unsafe fn serialize_fmu_state(c: Component, state: FmuState, out: *mut u8, s
                     out.copy_from_slice(&bytes);
                     Status::Ok
                 }
-                Ok(bytes) => w.instance.error(&format!(
-                    "fmi2SerializeFMUstate: size {size} given, the state needs {} bytes",
-                    bytes.len()
-                )),
+                Ok(bytes) => w.instance.error(&format!("fmi2SerializeFMUstate: size {size} given, the state needs {} bytes", bytes.len())),
                 Err(s) => s,
             },
             _ => null_argument(w, "fmi2SerializeFMUstate", "FMUstate or serializedState"),
@@ -752,7 +750,12 @@ macro_rules! export_fmi2 {
                 _dv_unknown: *mut f64,
             ) -> RawStatus {
                 unsafe {
-                    abi::unsupported(c, "fmi2GetDirectionalDerivative", Function::GetDirectionalDerivative, "providesDirectionalDerivative is false")
+                    abi::unsupported(
+                        c,
+                        "fmi2GetDirectionalDerivative",
+                        Function::GetDirectionalDerivative,
+                        "providesDirectionalDerivative is false",
+                    )
                 }
             }
             #[no_mangle]
@@ -763,7 +766,9 @@ macro_rules! export_fmi2 {
                 _order: *const c_int,
                 _v: *const f64,
             ) -> RawStatus {
-                unsafe { abi::unsupported(c, "fmi2SetRealInputDerivatives", Function::SetRealInputDerivatives, "canInterpolateInputs is false") }
+                unsafe {
+                    abi::unsupported(c, "fmi2SetRealInputDerivatives", Function::SetRealInputDerivatives, "canInterpolateInputs is false")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
@@ -773,7 +778,9 @@ macro_rules! export_fmi2 {
                 _order: *const c_int,
                 _v: *mut f64,
             ) -> RawStatus {
-                unsafe { abi::unsupported(c, "fmi2GetRealOutputDerivatives", Function::GetRealOutputDerivatives, "maxOutputDerivativeOrder is 0") }
+                unsafe {
+                    abi::unsupported(c, "fmi2GetRealOutputDerivatives", Function::GetRealOutputDerivatives, "maxOutputDerivativeOrder is 0")
+                }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2DoStep(c: Component, t: f64, h: f64, no_prior: c_int) -> RawStatus {

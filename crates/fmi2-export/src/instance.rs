@@ -494,10 +494,7 @@ impl Instance {
         }
         let tolerance = 1e-9 * self.time.abs().max(1.0);
         if !current.is_finite() || (current - self.time).abs() > tolerance {
-            return self.error(&format!(
-                "fmi2DoStep: currentCommunicationPoint {current} differs from the FMU's time {}",
-                self.time
-            ));
+            return self.error(&format!("fmi2DoStep: currentCommunicationPoint {current} differs from the FMU's time {}", self.time));
         }
         match self.model.do_step(&mut self.values, current, step) {
             Ok(()) => {

@@ -23,7 +23,6 @@ pub const PLATFORM: (&str, &str) = if cfg!(all(target_os = "linux", target_point
     ("unknown", "so")
 };
 
-
 /// Writes `path` as a `.fmu` with `binary` as `binaries/<platform>/<identifier>.<ext>` and
 /// `resources` as `(name, content)` pairs under `resources/`; `equations_html` goes into the
 /// documentation beside the table of variables. Nothing is left at `path` on failure.

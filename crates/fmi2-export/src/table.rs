@@ -50,11 +50,24 @@ impl TableBuilder {
     /// An empty table with `time` [s], the independent variable, first.
     pub fn new() -> Self {
         let mut b = Self { variables: Vec::new(), counts: [0; 4] };
-        b.push("time", Causality::Independent, Variability::Continuous, Kind::Real { start: None, unit: Some(Unit::SECOND) }, "Simulation time");
+        b.push(
+            "time",
+            Causality::Independent,
+            Variability::Continuous,
+            Kind::Real { start: None, unit: Some(Unit::SECOND) },
+            "Simulation time",
+        );
         b
     }
 
-    fn push(&mut self, name: impl Into<String>, causality: Causality, variability: Variability, kind: Kind, description: impl Into<String>) -> u32 {
+    fn push(
+        &mut self,
+        name: impl Into<String>,
+        causality: Causality,
+        variability: Variability,
+        kind: Kind,
+        description: impl Into<String>,
+    ) -> u32 {
         let slot = match kind {
             Kind::Real { .. } => 0,
             Kind::Integer { .. } => 1,
@@ -134,7 +147,13 @@ impl TableBuilder {
     ///
     /// # Panics
     /// If an entry of `depends_on` is not a real input added before.
-    pub fn output(&mut self, name: impl Into<String>, unit: impl Into<Option<Unit>>, description: impl Into<String>, depends_on: &[RealVar]) -> RealVar {
+    pub fn output(
+        &mut self,
+        name: impl Into<String>,
+        unit: impl Into<Option<Unit>>,
+        description: impl Into<String>,
+        depends_on: &[RealVar],
+    ) -> RealVar {
         let deps: Vec<usize> = depends_on
             .iter()
             .map(|input| {
@@ -151,12 +170,24 @@ impl TableBuilder {
     }
 
     /// Adds a fixed real parameter (set before initialization only), in `unit`.
-    pub fn parameter(&mut self, name: impl Into<String>, unit: impl Into<Option<Unit>>, start: f64, description: impl Into<String>) -> RealVar {
+    pub fn parameter(
+        &mut self,
+        name: impl Into<String>,
+        unit: impl Into<Option<Unit>>,
+        start: f64,
+        description: impl Into<String>,
+    ) -> RealVar {
         self.real(name, Causality::Parameter, Variability::Fixed, Some(start), unit, description)
     }
 
     /// Adds a tunable real parameter (settable between steps too), in `unit`.
-    pub fn tunable(&mut self, name: impl Into<String>, unit: impl Into<Option<Unit>>, start: f64, description: impl Into<String>) -> RealVar {
+    pub fn tunable(
+        &mut self,
+        name: impl Into<String>,
+        unit: impl Into<Option<Unit>>,
+        start: f64,
+        description: impl Into<String>,
+    ) -> RealVar {
         self.real(name, Causality::Parameter, Variability::Tunable, Some(start), unit, description)
     }
 

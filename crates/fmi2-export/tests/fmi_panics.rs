@@ -14,9 +14,11 @@ fn description() -> ModelDescription {
     let mut b = TableBuilder::new();
     let u = b.input("u", None, 0.0, "input");
     b.output("y", None, "output", &[u]);
-    ModelDescription::new("Bomb", "panics in fmi2DoStep", b.finish())
-        .unwrap()
-        .with_default_experiment(DefaultExperiment { start_time: 0.0, stop_time: 1.0, step_size: 0.1 })
+    ModelDescription::new("Bomb", "panics in fmi2DoStep", b.finish()).unwrap().with_default_experiment(DefaultExperiment {
+        start_time: 0.0,
+        stop_time: 1.0,
+        step_size: 0.1,
+    })
 }
 
 impl Model for Bomb {
@@ -55,7 +57,13 @@ fn panics_become_fatal_and_never_unwind_into_the_host() {
     // SAFETY: a non-variadic logger receives the same first five arguments on this ABI,
     // as ctypes-based hosts such as fmpy rely on.
     let logger: Logger = unsafe { std::mem::transmute(capture as unsafe extern "C" fn(_, _, _, _, _)) };
-    let callbacks = CallbackFunctions { logger: Some(logger), allocate_memory: None, free_memory: None, step_finished: None, component_environment: std::ptr::null_mut() };
+    let callbacks = CallbackFunctions {
+        logger: Some(logger),
+        allocate_memory: None,
+        free_memory: None,
+        step_finished: None,
+        component_environment: std::ptr::null_mut(),
+    };
     let dir = tempfile::tempdir().unwrap();
     let uri = CString::new(format!("file://{}", dir.path().display())).unwrap();
     let guid = CString::new(description().guid()).unwrap();

@@ -82,9 +82,12 @@ impl JointControllerModel {
             return Err(BuildError::Spec("the controller needs at least one joint".into()));
         }
         let mut b = TableBuilder::new();
-        let per_joint = |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..joints).map(|i| f(b, i)).collect::<Vec<_>>();
+        let per_joint =
+            |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..joints).map(|i| f(b, i)).collect::<Vec<_>>();
         let q = per_joint(&mut b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Measured angle of joint {}", i + 1)));
-        let qd = per_joint(&mut b, &|b, i| b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1)));
+        let qd = per_joint(&mut b, &|b, i| {
+            b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
+        });
         let tau_comp = per_joint(&mut b, &|b, i| {
             b.input(format!("tau_comp_{}", i + 1), NEWTON_METRE, 0.0, format!("Compensating (or feed-forward) torque of joint {}", i + 1))
         });
@@ -92,16 +95,30 @@ impl JointControllerModel {
             b.input(format!("q_ref_{}", i + 1), RADIAN, 0.0, format!("Target angle of joint {} when use_sequence is false", i + 1))
         });
         let qd_ref = per_joint(&mut b, &|b, i| {
-            b.input(format!("qd_ref_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Target velocity of joint {} when use_sequence is false", i + 1))
+            b.input(
+                format!("qd_ref_{}", i + 1),
+                RADIAN_PER_SECOND,
+                0.0,
+                format!("Target velocity of joint {} when use_sequence is false", i + 1),
+            )
         });
         let tau = per_joint(&mut b, &|b, i| {
             let deps = [q[i], qd[i], tau_comp[i], q_ref[i], qd_ref[i]];
             b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &deps)
         });
-        let target = per_joint(&mut b, &|b, i| b.output(format!("q_target_{}", i + 1), RADIAN, format!("Active target angle of joint {}", i + 1), &[q_ref[i]]));
-        let kp = per_joint(&mut b, &|b, i| b.tunable(format!("kp_{}", i + 1), NEWTON_METRE_PER_RADIAN, kp, format!("Position gain of joint {}", i + 1)));
+        let target = per_joint(&mut b, &|b, i| {
+            b.output(format!("q_target_{}", i + 1), RADIAN, format!("Active target angle of joint {}", i + 1), &[q_ref[i]])
+        });
+        let kp = per_joint(&mut b, &|b, i| {
+            b.tunable(format!("kp_{}", i + 1), NEWTON_METRE_PER_RADIAN, kp, format!("Position gain of joint {}", i + 1))
+        });
         let kd = per_joint(&mut b, &|b, i| {
-            b.tunable(format!("kd_{}", i + 1), NEWTON_METRE_SECOND_PER_RADIAN, kd, format!("Velocity gain of joint {} (0 in the paper)", i + 1))
+            b.tunable(
+                format!("kd_{}", i + 1),
+                NEWTON_METRE_SECOND_PER_RADIAN,
+                kd,
+                format!("Velocity gain of joint {} (0 in the paper)", i + 1),
+            )
         });
         let use_sequence =
             b.tunable_flag("use_sequence", use_sequence, "Follow the built-in target sequence (true) or the q_ref/qd_ref inputs (false)");
@@ -121,7 +138,9 @@ impl StaticModel for JointControllerModel {
         for i in 0..self.q.len() {
             let (target, target_velocity) =
                 if sequence { (sequence_target(i, time), 0.0) } else { (values[self.q_ref[i]], values[self.qd_ref[i]]) };
-            let tau = values[self.tau_comp[i]] + values[self.kp[i]] * (target - values[self.q[i]]) + values[self.kd[i]] * (target_velocity - values[self.qd[i]]);
+            let tau = values[self.tau_comp[i]]
+                + values[self.kp[i]] * (target - values[self.q[i]])
+                + values[self.kd[i]] * (target_velocity - values[self.qd[i]]);
             values[self.tau[i]] = tau;
             values[self.target[i]] = target;
         }

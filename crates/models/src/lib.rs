@@ -124,7 +124,10 @@ impl FmuSpec {
     /// A PlanarArm FMU of `config`, starting at rest at q = 0.
     pub fn planar_arm(identifier: &str, config: neurarm_physics::config::ArmConfig) -> Self {
         let n = config.arm.dof();
-        Self { identifier: identifier.to_owned(), model: ModelSpec::PlanarArm(PlanarArmSpec { config, q0: vec![0.0; n], qd0: vec![0.0; n] }) }
+        Self {
+            identifier: identifier.to_owned(),
+            model: ModelSpec::PlanarArm(PlanarArmSpec { config, q0: vec![0.0; n], qd0: vec![0.0; n] }),
+        }
     }
 
     /// The model this spec describes, for specs that need no files beside them.

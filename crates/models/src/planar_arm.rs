@@ -171,8 +171,20 @@ macro_rules! hardware_entry {
 
 /// Parameters of each joint, in table order; the FMU variable of joint i is `{name}_{i}`.
 pub const JOINT_PARAMETERS: [JointParameter; 16] = [
-    JointParameter { name: "length", unit: Some(METRE), description: "Length of link {}", get: |c, i| c.arm.links[i].length_m, set: |c, i, v| c.arm.links[i].length_m = v },
-    JointParameter { name: "mass", unit: Some(KILOGRAM), description: "Mass of link {}", get: |c, i| c.arm.links[i].mass_kg, set: |c, i, v| c.arm.links[i].mass_kg = v },
+    JointParameter {
+        name: "length",
+        unit: Some(METRE),
+        description: "Length of link {}",
+        get: |c, i| c.arm.links[i].length_m,
+        set: |c, i, v| c.arm.links[i].length_m = v,
+    },
+    JointParameter {
+        name: "mass",
+        unit: Some(KILOGRAM),
+        description: "Mass of link {}",
+        get: |c, i| c.arm.links[i].mass_kg,
+        set: |c, i, v| c.arm.links[i].mass_kg = v,
+    },
     JointParameter {
         name: "com",
         unit: Some(METRE),
@@ -189,13 +201,37 @@ pub const JOINT_PARAMETERS: [JointParameter; 16] = [
     },
     friction!("coulomb_pos", NEWTON_METRE, "Coulomb friction of joint {}, positive velocity", true, coulomb_nm),
     friction!("static_pos", NEWTON_METRE, "Static (breakaway) friction of joint {}, positive velocity", true, static_nm),
-    friction!("stribeck_velocity_pos", RADIAN_PER_SECOND, "Stribeck velocity of joint {}, positive velocity", true, stribeck_velocity_rad_s),
-    friction!("viscous_pos", NEWTON_METRE_SECOND_PER_RADIAN, "Viscous friction coefficient of joint {} at low speed, positive velocity", true, viscous_nms_rad),
+    friction!(
+        "stribeck_velocity_pos",
+        RADIAN_PER_SECOND,
+        "Stribeck velocity of joint {}, positive velocity",
+        true,
+        stribeck_velocity_rad_s
+    ),
+    friction!(
+        "viscous_pos",
+        NEWTON_METRE_SECOND_PER_RADIAN,
+        "Viscous friction coefficient of joint {} at low speed, positive velocity",
+        true,
+        viscous_nms_rad
+    ),
     falloff!("viscous_falloff_pos", "Speed at which the viscous slope of joint {} has halved, positive velocity (0: linear)", true),
     friction!("coulomb_neg", NEWTON_METRE, "Coulomb friction of joint {}, negative velocity (magnitude)", false, coulomb_nm),
     friction!("static_neg", NEWTON_METRE, "Static (breakaway) friction of joint {}, negative velocity (magnitude)", false, static_nm),
-    friction!("stribeck_velocity_neg", RADIAN_PER_SECOND, "Stribeck velocity of joint {}, negative velocity", false, stribeck_velocity_rad_s),
-    friction!("viscous_neg", NEWTON_METRE_SECOND_PER_RADIAN, "Viscous friction coefficient of joint {} at low speed, negative velocity", false, viscous_nms_rad),
+    friction!(
+        "stribeck_velocity_neg",
+        RADIAN_PER_SECOND,
+        "Stribeck velocity of joint {}, negative velocity",
+        false,
+        stribeck_velocity_rad_s
+    ),
+    friction!(
+        "viscous_neg",
+        NEWTON_METRE_SECOND_PER_RADIAN,
+        "Viscous friction coefficient of joint {} at low speed, negative velocity",
+        false,
+        viscous_nms_rad
+    ),
     falloff!("viscous_falloff_neg", "Speed at which the viscous slope of joint {} has halved, negative velocity (0: linear)", false),
     hardware_entry!("torque_limit", Some(NEWTON_METRE), "Largest torque motor {} can apply (0: no limit)", torque_limit_nm),
     hardware_entry!("encoder_counts", None, "Encoder counts per revolution of joint {} (0: exact angles)", encoder_counts_per_rev),
@@ -203,7 +239,13 @@ pub const JOINT_PARAMETERS: [JointParameter; 16] = [
 
 /// Parameters of the whole arm, in table order.
 pub const ARM_PARAMETERS: [ArmParameter; 5] = [
-    ArmParameter { name: "gravity", unit: Some(METRE_PER_SECOND_SQUARED), description: "Magnitude of gravitational acceleration", get: |c| c.arm.gravity_m_s2, set: |c, v| c.arm.gravity_m_s2 = v },
+    ArmParameter {
+        name: "gravity",
+        unit: Some(METRE_PER_SECOND_SQUARED),
+        description: "Magnitude of gravitational acceleration",
+        get: |c| c.arm.gravity_m_s2,
+        set: |c, v| c.arm.gravity_m_s2 = v,
+    },
     ArmParameter {
         name: "base_angle",
         unit: Some(RADIAN),
@@ -211,8 +253,20 @@ pub const ARM_PARAMETERS: [ArmParameter; 5] = [
         get: |c| c.arm.base_angle_rad,
         set: |c, v| c.arm.base_angle_rad = v,
     },
-    ArmParameter { name: "internal_step", unit: Some(Unit::SECOND), description: "Longest RK4 sub-step inside a communication step", get: |c| c.integrator.internal_step_s, set: |c, v| c.integrator.internal_step_s = v },
-    ArmParameter { name: "q_noise_std", unit: Some(RADIAN), description: "Standard deviation of the noise on measured angles", get: |c| c.hardware.q_noise_std_rad, set: |c, v| c.hardware.q_noise_std_rad = v },
+    ArmParameter {
+        name: "internal_step",
+        unit: Some(Unit::SECOND),
+        description: "Longest RK4 sub-step inside a communication step",
+        get: |c| c.integrator.internal_step_s,
+        set: |c, v| c.integrator.internal_step_s = v,
+    },
+    ArmParameter {
+        name: "q_noise_std",
+        unit: Some(RADIAN),
+        description: "Standard deviation of the noise on measured angles",
+        get: |c| c.hardware.q_noise_std_rad,
+        set: |c, v| c.hardware.q_noise_std_rad = v,
+    },
     ArmParameter {
         name: "qd_noise_std",
         unit: Some(RADIAN_PER_SECOND),
@@ -242,7 +296,8 @@ struct Layout {
 /// The FMU's variable table and layout for `config`, an arm of n joints.
 fn table(identifier: &str, config: &ArmConfig, initial: &ArmState) -> Result<(ModelDescription, Layout), BuildError> {
     let n = config.arm.dof();
-    let seed = i32::try_from(config.hardware.seed).map_err(|_| BuildError::Spec(format!("noise seed {} does not fit an FMI Integer", config.hardware.seed)))?;
+    let seed = i32::try_from(config.hardware.seed)
+        .map_err(|_| BuildError::Spec(format!("noise seed {} does not fit an FMI Integer", config.hardware.seed)))?;
     let mut b = TableBuilder::new();
     let joints = |f: &mut dyn FnMut(usize) -> RealVar| (0..n).map(f).collect::<Vec<RealVar>>();
     let tau = joints(&mut |i| b.input(format!("tau_{}", i + 1), NEWTON_METRE, 0.0, format!("Torque command of joint {}", i + 1)));
@@ -254,18 +309,30 @@ fn table(identifier: &str, config: &ArmConfig, initial: &ArmState) -> Result<(Mo
         b.output("xd", METRE_PER_SECOND, "End-effector velocity, x", &[]),
         b.output("yd", METRE_PER_SECOND, "End-effector velocity, y", &[]),
     ];
-    let q_meas = joints(&mut |i| b.output(format!("q_meas_{}", i + 1), RADIAN, format!("Measured angle of joint {} (encoder, noise)", i + 1), &[]));
-    let qd_meas = joints(&mut |i| b.output(format!("qd_meas_{}", i + 1), RADIAN_PER_SECOND, format!("Measured velocity of joint {} (noise)", i + 1), &[]));
+    let q_meas =
+        joints(&mut |i| b.output(format!("q_meas_{}", i + 1), RADIAN, format!("Measured angle of joint {} (encoder, noise)", i + 1), &[]));
+    let qd_meas = joints(&mut |i| {
+        b.output(format!("qd_meas_{}", i + 1), RADIAN_PER_SECOND, format!("Measured velocity of joint {} (noise)", i + 1), &[])
+    });
     let joint_params = JOINT_PARAMETERS
         .iter()
         .map(|p| {
             (0..n)
-                .map(|i| b.parameter(format!("{}_{}", p.name, i + 1), p.unit, (p.get)(config, i), p.description.replace("{}", &(i + 1).to_string())))
+                .map(|i| {
+                    b.parameter(
+                        format!("{}_{}", p.name, i + 1),
+                        p.unit,
+                        (p.get)(config, i),
+                        p.description.replace("{}", &(i + 1).to_string()),
+                    )
+                })
                 .collect()
         })
         .collect();
     let q0 = joints(&mut |i| b.parameter(format!("q0_{}", i + 1), RADIAN, initial.q[i], format!("Initial angle of joint {}", i + 1)));
-    let qd0 = joints(&mut |i| b.parameter(format!("qd0_{}", i + 1), RADIAN_PER_SECOND, initial.qd[i], format!("Initial velocity of joint {}", i + 1)));
+    let qd0 = joints(&mut |i| {
+        b.parameter(format!("qd0_{}", i + 1), RADIAN_PER_SECOND, initial.qd[i], format!("Initial velocity of joint {}", i + 1))
+    });
     let arm_params = ARM_PARAMETERS.iter().map(|p| b.parameter(p.name, p.unit, (p.get)(config), p.description)).collect();
     let seed = b.integer("noise_seed", Causality::Parameter, Variability::Fixed, Some(seed), "Seed of the measurement noise");
     let description = describe(identifier, format!("Planar {n}-R arm with joint friction (neurarm)"), b.finish())?;
@@ -291,10 +358,23 @@ impl PlanarArmModel {
         config.validate()?;
         let n = config.arm.dof();
         if initial.q.len() != n || initial.qd.len() != n {
-            return Err(BuildError::Spec(format!("the initial state has {} angles and {} velocities for {n} joints", initial.q.len(), initial.qd.len())));
+            return Err(BuildError::Spec(format!(
+                "the initial state has {} angles and {} velocities for {n} joints",
+                initial.q.len(),
+                initial.qd.len()
+            )));
         }
         let (description, layout) = table(identifier, &config, &initial)?;
-        Ok(Self { description, layout, template: config, running: None, state: initial, tau: vec![0.0; n], q_meas: vec![0.0; n], qd_meas: vec![0.0; n] })
+        Ok(Self {
+            description,
+            layout,
+            template: config,
+            running: None,
+            state: initial,
+            tau: vec![0.0; n],
+            q_meas: vec![0.0; n],
+            qd_meas: vec![0.0; n],
+        })
     }
 
     /// The configuration in `values`, checked.

@@ -41,14 +41,20 @@ impl CompensatorPorts {
     /// Declares the ports of a compensator of `joints` joints with `parts` in `b`; the switches
     /// start as `enable`, and a part the compensator lacks starts switched off.
     pub fn declare(b: &mut TableBuilder, joints: usize, parts: Parts, enable: (bool, bool)) -> Self {
-        let per_joint = |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..joints).map(|i| f(b, i)).collect::<Vec<_>>();
+        let per_joint =
+            |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..joints).map(|i| f(b, i)).collect::<Vec<_>>();
         let q = per_joint(b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Angle of joint {}", i + 1)));
         let qd = per_joint(b, &|b, i| b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Velocity of joint {}", i + 1)));
         let source = parts.source;
         let capital = |s: &str| s[..1].to_uppercase() + &s[1..];
         let friction = per_joint(b, &|b, i| {
             let deps: &[RealVar] = if parts.friction { std::slice::from_ref(&qd[i]) } else { &[] };
-            b.output(format!("tau_friction_{}", i + 1), NEWTON_METRE, format!("{} friction torque of joint {}", capital(source), i + 1), deps)
+            b.output(
+                format!("tau_friction_{}", i + 1),
+                NEWTON_METRE,
+                format!("{} friction torque of joint {}", capital(source), i + 1),
+                deps,
+            )
         });
         let gravity = per_joint(b, &|b, i| {
             let deps: &[RealVar] = if parts.gravity { &q } else { &[] };
@@ -59,7 +65,12 @@ impl CompensatorPorts {
             if parts.friction {
                 deps.push(qd[i]);
             }
-            b.output(format!("tau_comp_{}", i + 1), NEWTON_METRE, format!("Compensating torque of joint {}: the sum of the enabled parts", i + 1), &deps)
+            b.output(
+                format!("tau_comp_{}", i + 1),
+                NEWTON_METRE,
+                format!("Compensating torque of joint {}: the sum of the enabled parts", i + 1),
+                &deps,
+            )
         });
         let enable_friction = b.tunable_flag("enable_friction", enable.0 && parts.friction, format!("Add the {source} friction torques"));
         let enable_gravity = b.tunable_flag("enable_gravity", enable.1 && parts.gravity, format!("Add the {source} gravity torques"));

@@ -68,7 +68,8 @@ impl IntegratorModel {
         let u = b.input("u", None, 0.0, "Input: the derivative of y");
         let y = b.output("y", None, "Integral of u from y0", &[]);
         let y0 = b.parameter("y0", None, y0, "Initial value of y");
-        let description = describe(identifier, "Integrator y' = u with the input held over each step (neurarm test block)".into(), b.finish())?;
+        let description =
+            describe(identifier, "Integrator y' = u with the input held over each step (neurarm test block)".into(), b.finish())?;
         Ok(Self { description, u, y, y0, state: 0.0 })
     }
 }

@@ -80,18 +80,32 @@ impl TaskSpaceControllerModel {
         }
         let mut b = TableBuilder::new();
         let per_joint = |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..n).map(|i| f(b, i)).collect::<Vec<_>>();
-        let q = per_joint(&mut b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
-        let qd = per_joint(&mut b, &|b, i| b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1)));
+        let q =
+            per_joint(&mut b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
+        let qd = per_joint(&mut b, &|b, i| {
+            b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
+        });
         let tau_comp = per_joint(&mut b, &|b, i| {
-            b.input(format!("tau_comp_{}", i + 1), NEWTON_METRE, 0.0, format!("Compensating torque added to joint {} (friction model, NN, or 0)", i + 1))
+            b.input(
+                format!("tau_comp_{}", i + 1),
+                NEWTON_METRE,
+                0.0,
+                format!("Compensating torque added to joint {} (friction model, NN, or 0)", i + 1),
+            )
         });
         let all: Vec<RealVar> = q.iter().chain(&qd).chain(&tau_comp).copied().collect();
-        let tau = per_joint(&mut b, &|b, i| b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all));
+        let tau =
+            per_joint(&mut b, &|b, i| b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all));
         let reference = [b.output("x_ref", METRE, "Reference x_d(t)", &[]), b.output("y_ref", METRE, "Reference y_d(t)", &[])];
         let error = [b.output("error_x", METRE, "Tracking error x_d − x", &q), b.output("error_y", METRE, "Tracking error y_d − y", &q)];
         let kp = b.tunable("kp", PER_SECOND_SQUARED, gains.kp, "Position gain K_p");
         let kd = b.tunable("kd", PER_SECOND, gains.kd, "Velocity gain K_d");
-        let null_damping = b.tunable("null_damping", PER_SECOND, gains.null_damping, "Null-space damping k_null: self-motion decays as -k_null (I - J#J) qd");
+        let null_damping = b.tunable(
+            "null_damping",
+            PER_SECOND,
+            gains.null_damping,
+            "Null-space damping k_null: self-motion decays as -k_null (I - J#J) qd",
+        );
         let centre = [
             b.parameter("centre_x", METRE, centre[0], "x of the reference's centre"),
             b.parameter("centre_y", METRE, centre[1], "y of the reference's centre"),
@@ -99,7 +113,22 @@ impl TaskSpaceControllerModel {
         let text = format!("Task-space computed-torque controller for a {n}-joint planar arm, the paper's reference (neurarm)");
         let description = describe(identifier, text, b.finish())?;
         let data = TaskSpaceData::new(&model);
-        Ok(Self { description, model, q, qd, tau_comp, tau, reference, error, kp, kd, null_damping, centre, data, buf: std::array::from_fn(|_| vec![0.0; n]) })
+        Ok(Self {
+            description,
+            model,
+            q,
+            qd,
+            tau_comp,
+            tau,
+            reference,
+            error,
+            kp,
+            kd,
+            null_damping,
+            centre,
+            data,
+            buf: std::array::from_fn(|_| vec![0.0; n]),
+        })
     }
 }
 

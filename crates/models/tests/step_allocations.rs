@@ -56,7 +56,16 @@ fn net_file(n_in: usize, hidden: usize, n_out: usize) -> WeightsFile {
         output_scaling: MinMaxScaling { min: vec![-2.0; n_out], max: vec![2.0; n_out] },
     };
     let signals = |p: &str, n: usize| (1..=n).map(|i| Signal { name: format!("{p}_{i}"), unit: String::new() }).collect();
-    let report = TrainReport { epochs: 0, best_epoch: 0, stop_reason: StopReason::Epochs, restart: 0, train_mse: 0.0, validation_mse: None, test_mse: None, counts: [0; 3] };
+    let report = TrainReport {
+        epochs: 0,
+        best_epoch: 0,
+        stop_reason: StopReason::Epochs,
+        restart: 0,
+        train_mse: 0.0,
+        validation_mse: None,
+        test_mse: None,
+        counts: [0; 3],
+    };
     WeightsFile::new(&net, signals("x", n_in), signals("y", n_out), TrainSettings::default(), report)
 }
 
@@ -70,7 +79,8 @@ fn step_allocations(model: Box<dyn Model>) -> usize {
         .filter(|v| v.causality == fmi2_export::Causality::Input && v.base_type() == fmi2_export::description::BaseType::Real)
         .map(|v| v.value_reference)
         .collect();
-    let outputs: Vec<u32> = description.variables.iter().filter(|v| v.causality == fmi2_export::Causality::Output).map(|v| v.value_reference).collect();
+    let outputs: Vec<u32> =
+        description.variables.iter().filter(|v| v.causality == fmi2_export::Causality::Output).map(|v| v.value_reference).collect();
     let name = description.model_identifier.clone();
     let mut instance = Instance::new("probe", &description.guid(), model, Box::new(|_, _, m| eprintln!("{m}")), false).unwrap();
     assert_eq!(instance.setup_experiment(None, 0.0, None), Status::Ok);
@@ -115,7 +125,11 @@ fn every_models_step_allocates_nothing() {
             enable_friction: true,
             enable_gravity: true,
         }),
-        ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: arm.clone().with_base_angle(1.0), enable_friction: true, enable_gravity: true }),
+        ModelSpec::IdealCompensator(IdealCompensatorSpec {
+            arm: arm.clone().with_base_angle(1.0),
+            enable_friction: true,
+            enable_gravity: true,
+        }),
         ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
             model: arm.clone().frictionless(),
             gains: TaskSpaceGains::default(),

@@ -65,8 +65,8 @@ impl ArmConfig {
 
     /// Parses and checks TOML text.
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
-        let config: Self = toml::from_str(text)
-            .map_err(|e| ConfigError::Parse { path: "<text>".into(), message: e.to_string().trim_end().to_owned() })?;
+        let config: Self =
+            toml::from_str(text).map_err(|e| ConfigError::Parse { path: "<text>".into(), message: e.to_string().trim_end().to_owned() })?;
         config.validate().map_err(|source| ConfigError::Invalid { path: "<text>".into(), source })?;
         Ok(config)
     }

@@ -98,7 +98,8 @@ fn closed_loop_error_follows_the_second_order_error_dynamics() {
     for step in 0..5000 {
         let t = step as f64 * h;
         let (x, v, a) = paper_reference(t, centre);
-        let u = task_space_acceleration(&arm, &state.q, &state.qd, &TaskReference { position: x, velocity: v, acceleration: a }, &gains).unwrap();
+        let u = task_space_acceleration(&arm, &state.q, &state.qd, &TaskReference { position: x, velocity: v, acceleration: a }, &gains)
+            .unwrap();
         let tau = computed_torque(&arm, &state.q, &state.qd, &u, &[0.0; 4]);
         sim.step(&mut state, tau.as_slice(), h).unwrap();
         if (step + 1) % 500 == 0 {

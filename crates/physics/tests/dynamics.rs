@@ -59,12 +59,22 @@ fn matches_pinocchio_reference_values() {
         let h_rows: Vec<f64> = (0..4).flat_map(|i| (0..4).map(move |j| (i, j))).map(|(i, j)| h[(i, j)]).collect();
         worst = worst.max(assert_close(&format!("case {c} H"), &h_rows, &h_ref, 1e-9));
         let tol = 1e-9;
-        worst = worst.max(assert_close(&format!("case {c} C·qd"), coriolis_centrifugal(&arm, &q, &qd).as_slice(), &vec_of(&case["coriolis_centrifugal"]), tol));
+        worst = worst.max(assert_close(
+            &format!("case {c} C·qd"),
+            coriolis_centrifugal(&arm, &q, &qd).as_slice(),
+            &vec_of(&case["coriolis_centrifugal"]),
+            tol,
+        ));
         worst = worst.max(assert_close(&format!("case {c} g"), gravity_torques(&arm, &q).as_slice(), &vec_of(&case["gravity"]), tol));
         let id_ref = vec_of(&case["inverse_dynamics"]);
         worst = worst.max(assert_close(&format!("case {c} ID"), inverse_dynamics(&arm, &q, &qd, &qdd).as_slice(), &id_ref, tol));
         worst = worst.max(assert_close(&format!("case {c} RNEA"), inverse_dynamics_rnea(&arm, &q, &qd, &qdd).as_slice(), &id_ref, tol));
-        worst = worst.max(assert_close(&format!("case {c} x"), end_effector_position(&arm, &q).as_slice(), &vec_of(&case["end_effector"]), tol));
+        worst = worst.max(assert_close(
+            &format!("case {c} x"),
+            end_effector_position(&arm, &q).as_slice(),
+            &vec_of(&case["end_effector"]),
+            tol,
+        ));
         let jac = jacobian(&arm, &q);
         let jac_ref: Vec<f64> = case["jacobian"].as_array().unwrap().iter().flat_map(vec_of).collect();
         let jac_rows: Vec<f64> = (0..2).flat_map(|i| (0..4).map(move |j| (i, j))).map(|(i, j)| jac[(i, j)]).collect();

@@ -5,12 +5,7 @@ use neurarm_physics::arm::*;
 
 /// One link of the default arm, in the horizontal plane, with `friction`.
 fn single_joint(friction: JointFriction) -> ArmParams {
-    ArmParams {
-        links: vec![LinkParams::uniform_rod(0.25, 2.0)],
-        friction: vec![friction],
-        gravity_m_s2: 9.81,
-        base_angle_rad: 0.0,
-    }
+    ArmParams { links: vec![LinkParams::uniform_rod(0.25, 2.0)], friction: vec![friction], gravity_m_s2: 9.81, base_angle_rad: 0.0 }
 }
 
 /// Velocity on the rising branch where the friction magnitude equals `torque` > breakaway.
@@ -67,11 +62,7 @@ fn constant_torque_above_breakaway_reaches_predicted_velocity() {
             assert!(tau.abs() > branch.static_nm);
             let want = tau.signum() * predicted_speed(branch, tau.abs());
             let s = run(&arm, &[tau], 20.0);
-            assert!(
-                (s.qd[0] - want).abs() < 1e-6,
-                "tau {tau}: steady velocity {} vs predicted {want}",
-                s.qd[0]
-            );
+            assert!((s.qd[0] - want).abs() < 1e-6, "tau {tau}: steady velocity {} vs predicted {want}", s.qd[0]);
         }
     }
 }
@@ -105,10 +96,15 @@ fn stribeck_joint_breaks_away_just_above_static_level() {
 #[test]
 fn whole_arm_below_breakaway_stays_put_and_above_moves() {
     let arm = ArmParams::default_four_link();
-    let below: Vec<f64> = arm.friction.iter().enumerate().map(|(i, f)| {
-        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
-        0.95 * sign * f.positive.static_nm
-    }).collect();
+    let below: Vec<f64> = arm
+        .friction
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            0.95 * sign * f.positive.static_nm
+        })
+        .collect();
     let s = run(&arm, &below, 2.0);
     assert!(s.q.iter().chain(&s.qd).all(|&x| x == 0.0), "moved: {s:?}");
     let mut above = below.clone();
@@ -157,10 +153,7 @@ fn bad_step_arguments_leave_the_state_untouched() {
     assert!(matches!(sim.step(&mut s, &[1.0; 4], 0.0), Err(StepError::BadStep(_))));
     assert!(matches!(sim.step(&mut s, &[1.0; 4], f64::NAN), Err(StepError::BadStep(_))));
     assert!(matches!(sim.step(&mut s, &[1.0; 3], 1e-3), Err(StepError::WrongLength { .. })));
-    assert!(matches!(
-        sim.step(&mut s, &[1.0, f64::NAN, 0.0, 0.0], 1e-3),
-        Err(StepError::NotFinite { what: "tau", index: 1, .. })
-    ));
+    assert!(matches!(sim.step(&mut s, &[1.0, f64::NAN, 0.0, 0.0], 1e-3), Err(StepError::NotFinite { what: "tau", index: 1, .. })));
     assert_eq!(s, before);
 }
 

@@ -185,7 +185,12 @@ fn malformed_weights_files_get_clear_messages() {
     fails(&|v| v["iw"][1] = serde_json::json!([1.0, 2.0]), "iw row 1 has 2 values, expected 1");
     fails(&|v| v["lw"][0][2] = serde_json::Value::Null, "invalid type: null");
     fails(&|v| v["input_scaling"]["min"][0] = 10.0.into(), "input_scaling row 0: min 10 is not <= max");
-    fails(&|v| { v.as_object_mut().unwrap().remove("lw"); }, "missing field `lw`");
+    fails(
+        &|v| {
+            v.as_object_mut().unwrap().remove("lw");
+        },
+        "missing field `lw`",
+    );
     fails(&|v| v["extra"] = 1.into(), "unknown field `extra`");
     let e = WeightsFile::from_json("{\"format\": \"neurarm-weights\", \"version\": 1, \"b1\": [NaN]}", "nan.json").unwrap_err().to_string();
     assert!(e.starts_with("nan.json: "), "{e}");

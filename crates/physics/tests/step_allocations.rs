@@ -43,13 +43,23 @@ fn stepping_allocates_nothing() {
     sim.set_torque_limits(Some(vec![5.0; 4])).unwrap();
     let mut state = ArmState::at_rest(vec![0.3, -0.5, 0.7, -0.2]);
     let mut sensors = Sensors::new(
-        HardwareEffects { encoder_counts_per_rev: Some(vec![4096.0; 4]), q_noise_std_rad: 1e-3, qd_noise_std_rad_s: 1e-2, ..Default::default() },
+        HardwareEffects {
+            encoder_counts_per_rev: Some(vec![4096.0; 4]),
+            q_noise_std_rad: 1e-3,
+            qd_noise_std_rad_s: 1e-2,
+            ..Default::default()
+        },
         4,
     )
     .unwrap();
     let (mut q, mut qd) = ([0.0; 4], [0.0; 4]);
     // Warm up: the counter itself is lazily set up on first use.
-    assert!(allocations_during(|| { let _ = Box::new(1); }) >= 1, "the counter must see allocations");
+    assert!(
+        allocations_during(|| {
+            let _ = Box::new(1);
+        }) >= 1,
+        "the counter must see allocations"
+    );
     let count = allocations_during(|| {
         for k in 0..2000 {
             let tau = [3.0 * (k as f64 * 1e-3).sin(), 1.0, -0.5, 0.35];

@@ -15,7 +15,8 @@ pub const EQUATIONS_HTML: &str = "<p><code>ẍ = μ (1 − x²) ẋ − x + u</c
 /// Writes the FMU of the library at `binary` to `out`.
 pub fn write_fmu(binary: &Path, out: &Path) -> Result<(), String> {
     let model = crate::VanDerPol::new().map_err(|e| e.to_string())?;
-    fmi2_export::package::write_fmu(out, model.description(), binary, &[], EQUATIONS_HTML).map_err(|e| format!("writing {}: {e}", out.display()))
+    fmi2_export::package::write_fmu(out, model.description(), binary, &[], EQUATIONS_HTML)
+        .map_err(|e| format!("writing {}: {e}", out.display()))
 }
 
 /// The built library: `$VAN_DER_POL_BINARY`, else beside the running program (or one folder
@@ -30,7 +31,9 @@ pub fn built_library() -> Result<PathBuf, String> {
     if let Some(p) = beside.into_iter().find(|p| p.is_file()) {
         return Ok(p);
     }
-    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target"));
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target"));
     let newest = ["release", "debug"]
         .iter()
         .map(|profile| target.join(profile).join(LIBRARY))

@@ -331,28 +331,13 @@ pub(crate) fn mass_matrix_at_angles(params: &ArmParams, ws: &mut ArmData, h: &mu
 
 /// Recursive Newton–Euler: τ for accelerations `qdd` (zero if `None`) under in-plane gravity
 /// `gravity` [m/s², along −y], written into `tau`, without allocating.
-pub(crate) fn rnea_into(
-    params: &ArmParams,
-    q: &[f64],
-    qd: &[f64],
-    qdd: Option<&[f64]>,
-    gravity: f64,
-    ws: &mut ArmData,
-    tau: &mut [f64],
-) {
+pub(crate) fn rnea_into(params: &ArmParams, q: &[f64], qd: &[f64], qdd: Option<&[f64]>, gravity: f64, ws: &mut ArmData, tau: &mut [f64]) {
     ws.set_angles(q);
     rnea_at_angles(params, qd, qdd, gravity, ws, tau);
 }
 
 /// [`rnea_into`] at the angles last given to [`ArmData::set_angles`].
-pub(crate) fn rnea_at_angles(
-    params: &ArmParams,
-    qd: &[f64],
-    qdd: Option<&[f64]>,
-    gravity: f64,
-    ws: &mut ArmData,
-    tau: &mut [f64],
-) {
+pub(crate) fn rnea_at_angles(params: &ArmParams, qd: &[f64], qdd: Option<&[f64]>, gravity: f64, ws: &mut ArmData, tau: &mut [f64]) {
     let n = ws.n;
     // Outward pass. Gravity is an upward acceleration of the base.
     let mut joint_acc = [0.0, gravity];
@@ -377,9 +362,7 @@ pub(crate) fn rnea_at_angles(
         let (c, s) = (ws.cos[i], ws.sin[i]);
         let inertial = [link.mass_kg * ws.com_accel[i][0], link.mass_kg * ws.com_accel[i][1]];
         let cross = |r: f64, f: [f64; 2]| r * (c * f[1] - s * f[0]);
-        moment += link.inertia_kgm2 * ws.angular_accel[i]
-            + cross(link.com_m, inertial)
-            + cross(link.length_m, force);
+        moment += link.inertia_kgm2 * ws.angular_accel[i] + cross(link.com_m, inertial) + cross(link.length_m, force);
         force = [force[0] + inertial[0], force[1] + inertial[1]];
         tau[i] = moment;
     }

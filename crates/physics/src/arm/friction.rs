@@ -50,13 +50,7 @@ pub struct FrictionBranch {
 impl FrictionBranch {
     /// Coulomb + viscous: `coulomb_nm` [N·m] plus `viscous_nms_rad` [N·m·s/rad] times speed.
     pub const fn coulomb_viscous(coulomb_nm: f64, viscous_nms_rad: f64) -> Self {
-        Self {
-            coulomb_nm,
-            static_nm: coulomb_nm,
-            stribeck_velocity_rad_s: 1.0,
-            viscous_nms_rad,
-            viscous_falloff_rad_s: None,
-        }
+        Self { coulomb_nm, static_nm: coulomb_nm, stribeck_velocity_rad_s: 1.0, viscous_nms_rad, viscous_falloff_rad_s: None }
     }
 
     /// Friction magnitude at speed `speed_rad_s >= 0` [N·m]; at 0 it is the static level.
@@ -79,24 +73,9 @@ impl FrictionBranch {
     fn validate(&self, name: impl Fn() -> String) -> Result<(), ParamError> {
         let f = |field: &str| format!("{}.{field}", name());
         check(|| f("coulomb_nm"), self.coulomb_nm, self.coulomb_nm >= 0.0, "must be >= 0")?;
-        check(
-            || f("static_nm"),
-            self.static_nm,
-            self.static_nm >= self.coulomb_nm,
-            "must be >= coulomb_nm",
-        )?;
-        check(
-            || f("stribeck_velocity_rad_s"),
-            self.stribeck_velocity_rad_s,
-            self.stribeck_velocity_rad_s > 0.0,
-            "must be > 0",
-        )?;
-        check(
-            || f("viscous_nms_rad"),
-            self.viscous_nms_rad,
-            self.viscous_nms_rad >= 0.0,
-            "must be >= 0",
-        )?;
+        check(|| f("static_nm"), self.static_nm, self.static_nm >= self.coulomb_nm, "must be >= coulomb_nm")?;
+        check(|| f("stribeck_velocity_rad_s"), self.stribeck_velocity_rad_s, self.stribeck_velocity_rad_s > 0.0, "must be > 0")?;
+        check(|| f("viscous_nms_rad"), self.viscous_nms_rad, self.viscous_nms_rad >= 0.0, "must be >= 0")?;
         if let Some(vf) = self.viscous_falloff_rad_s {
             check(|| f("viscous_falloff_rad_s"), vf, vf > 0.0, "must be > 0")?;
         }
@@ -216,10 +195,7 @@ mod tests {
 
     #[test]
     fn viscous_falloff_halves_the_slope() {
-        let b = FrictionBranch {
-            viscous_falloff_rad_s: Some(2.0),
-            ..FrictionBranch::coulomb_viscous(0.0, 1.0)
-        };
+        let b = FrictionBranch { viscous_falloff_rad_s: Some(2.0), ..FrictionBranch::coulomb_viscous(0.0, 1.0) };
         let slope = |s: f64| (b.magnitude(s + 1e-6) - b.magnitude(s - 1e-6)) / 2e-6;
         assert!((slope(1e-3) - 1.0).abs() < 1e-3);
         assert!((slope(2.0) - 0.5).abs() < 1e-8);

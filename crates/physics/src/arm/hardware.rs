@@ -32,10 +32,7 @@ pub struct HardwareEffects {
 impl HardwareEffects {
     /// Checks every value against an arm of `dof` joints.
     pub fn validate(&self, dof: usize) -> Result<(), ParamError> {
-        for (name, list) in [
-            ("encoder_counts_per_rev", &self.encoder_counts_per_rev),
-            ("torque_limit_nm", &self.torque_limit_nm),
-        ] {
+        for (name, list) in [("encoder_counts_per_rev", &self.encoder_counts_per_rev), ("torque_limit_nm", &self.torque_limit_nm)] {
             if let Some(v) = list {
                 if v.len() != dof {
                     return Err(ParamError::Invalid {

@@ -122,18 +122,10 @@ impl ArmSimulator {
     pub fn new(params: ArmParams, settings: IntegratorSettings) -> Result<Self, ParamError> {
         params.validate()?;
         if !(settings.internal_step_s.is_finite() && settings.internal_step_s > 0.0) {
-            return Err(ParamError::Invalid {
-                name: "internal_step_s".into(),
-                value: settings.internal_step_s,
-                why: "must be > 0",
-            });
+            return Err(ParamError::Invalid { name: "internal_step_s".into(), value: settings.internal_step_s, why: "must be > 0" });
         }
         let n = params.dof();
-        let modes = params
-            .friction
-            .iter()
-            .map(|f| if f.is_discontinuous() { Mode::Sliding(1.0) } else { Mode::Continuous })
-            .collect();
+        let modes = params.friction.iter().map(|f| if f.is_discontinuous() { Mode::Sliding(1.0) } else { Mode::Continuous }).collect();
         let v = || vec![0.0; n];
         Ok(Self {
             settings,

@@ -137,9 +137,7 @@ mod tests {
         let qd = [1.2, -0.4, 2.5, -3.0];
         let eps = 1e-6;
         let shifted = |s: f64| -> Vec<f64> { q.iter().zip(&qd).map(|(a, b)| a + s * b).collect() };
-        let d = (end_effector_velocity(&p, &shifted(eps), &qd)
-            - end_effector_velocity(&p, &shifted(-eps), &qd))
-            / (2.0 * eps);
+        let d = (end_effector_velocity(&p, &shifted(eps), &qd) - end_effector_velocity(&p, &shifted(-eps), &qd)) / (2.0 * eps);
         let exact = jacobian_dot_qd(&p, &q, &qd);
         assert!((d - exact).norm() < 1e-7, "{d} vs {exact}");
     }

@@ -24,12 +24,7 @@ pub struct LinkParams {
 impl LinkParams {
     /// A uniform slender rod of `length_m` and `mass_kg`: centre of mass at mid-link, inertia m·l²/12.
     pub fn uniform_rod(length_m: f64, mass_kg: f64) -> Self {
-        Self {
-            length_m,
-            mass_kg,
-            com_m: 0.5 * length_m,
-            inertia_kgm2: mass_kg * length_m * length_m / 12.0,
-        }
+        Self { length_m, mass_kg, com_m: 0.5 * length_m, inertia_kgm2: mass_kg * length_m * length_m / 12.0 }
     }
 }
 
@@ -78,12 +73,7 @@ pub enum ParamError {
 }
 
 /// Checks that `value` is finite and satisfies `ok`, naming the parameter otherwise.
-pub(crate) fn check(
-    name: impl FnOnce() -> String,
-    value: f64,
-    ok: bool,
-    why: &'static str,
-) -> Result<(), ParamError> {
+pub(crate) fn check(name: impl FnOnce() -> String, value: f64, ok: bool, why: &'static str) -> Result<(), ParamError> {
     if value.is_finite() && ok {
         Ok(())
     } else {
@@ -133,21 +123,13 @@ impl ArmParams {
             return Err(ParamError::NoJoints);
         }
         if self.friction.len() != self.links.len() {
-            return Err(ParamError::FrictionCount {
-                links: self.links.len(),
-                friction: self.friction.len(),
-            });
+            return Err(ParamError::FrictionCount { links: self.links.len(), friction: self.friction.len() });
         }
         for (i, l) in self.links.iter().enumerate() {
             check(|| format!("links[{i}].length_m"), l.length_m, l.length_m > 0.0, "must be > 0")?;
             check(|| format!("links[{i}].mass_kg"), l.mass_kg, l.mass_kg > 0.0, "must be > 0")?;
             check(|| format!("links[{i}].com_m"), l.com_m, true, "must be finite")?;
-            check(
-                || format!("links[{i}].inertia_kgm2"),
-                l.inertia_kgm2,
-                l.inertia_kgm2 >= 0.0,
-                "must be >= 0",
-            )?;
+            check(|| format!("links[{i}].inertia_kgm2"), l.inertia_kgm2, l.inertia_kgm2 >= 0.0, "must be >= 0")?;
         }
         for (i, f) in self.friction.iter().enumerate() {
             f.validate(i)?;

@@ -183,7 +183,8 @@ pub fn task_space_acceleration_into(
     d.qd.copy_from_slice(qd);
     let x = crate::arm::end_effector_position(model, q);
     let xd = Vector2::new((d.jacobian.row(0) * &d.qd)[0], (d.jacobian.row(1) * &d.qd)[0]);
-    let a = reference.acceleration + gains.kd * (reference.velocity - xd) + gains.kp * (reference.position - x) - jacobian_dot_qd(model, q, qd);
+    let a =
+        reference.acceleration + gains.kd * (reference.velocity - xd) + gains.kp * (reference.position - x) - jacobian_dot_qd(model, q, qd);
     d.task_acceleration.copy_from_slice(a.as_slice());
     d.pseudo_inverse.mul_to(&d.task_acceleration, &mut d.task);
     d.pseudo_inverse.mul_to(&d.jacobian, &mut d.pinv_j);
@@ -198,7 +199,13 @@ pub fn task_space_acceleration_into(
 
 /// Joint accelerations the task-space law asks for: [`task_space_acceleration_into`] into a
 /// new vector; `None` when the inputs are not finite.
-pub fn task_space_acceleration(model: &ArmParams, q: &[f64], qd: &[f64], reference: &TaskReference, gains: &TaskSpaceGains) -> Option<DVector<f64>> {
+pub fn task_space_acceleration(
+    model: &ArmParams,
+    q: &[f64],
+    qd: &[f64],
+    reference: &TaskReference,
+    gains: &TaskSpaceGains,
+) -> Option<DVector<f64>> {
     let mut data = TaskSpaceData::new(model);
     task_space_acceleration_into(model, &mut data, q, qd, reference, gains).then_some(data.u)
 }

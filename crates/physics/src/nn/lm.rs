@@ -406,7 +406,12 @@ pub struct Trained {
 
 /// Trains a net mapping `inputs` (one row per input, one column per sample, original
 /// units) to `targets` (one row per output). `on_epoch` sees every epoch's progress.
-pub fn train(inputs: &DMatrix<f64>, targets: &DMatrix<f64>, settings: &TrainSettings, on_epoch: &mut dyn FnMut(&EpochInfo<'_>)) -> Result<Trained, TrainError> {
+pub fn train(
+    inputs: &DMatrix<f64>,
+    targets: &DMatrix<f64>,
+    settings: &TrainSettings,
+    on_epoch: &mut dyn FnMut(&EpochInfo<'_>),
+) -> Result<Trained, TrainError> {
     let q = inputs.ncols();
     if q == 0 || targets.ncols() != q {
         return Err(TrainError::Data(format!("{q} input samples and {} target samples", targets.ncols())));
@@ -450,7 +455,11 @@ pub fn train(inputs: &DMatrix<f64>, targets: &DMatrix<f64>, settings: &TrainSett
         let norm_train = (train_part.count * k) as f64;
         let mut train_mse = ws.sse(&theta, &train_part, &mut per_output) / norm_train;
         let val_of = |ws: &mut Workspace, theta: &[f64], po: &mut [f64]| {
-            if val_part.count == 0 { f64::NAN } else { ws.sse(theta, &val_part, po) / (val_part.count * k) as f64 }
+            if val_part.count == 0 {
+                f64::NAN
+            } else {
+                ws.sse(theta, &val_part, po) / (val_part.count * k) as f64
+            }
         };
         let mut best_val = val_of(&mut ws, &theta, &mut per_output);
         let mut best_theta = theta.clone();

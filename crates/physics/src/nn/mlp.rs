@@ -19,10 +19,7 @@ impl MinMaxScaling {
     /// Fits to `data`, one row per variable, one column per sample.
     pub fn fit(data: &DMatrix<f64>) -> Self {
         let rows = 0..data.nrows();
-        Self {
-            min: rows.clone().map(|r| data.row(r).min()).collect(),
-            max: rows.map(|r| data.row(r).max()).collect(),
-        }
+        Self { min: rows.clone().map(|r| data.row(r).min()).collect(), max: rows.map(|r| data.row(r).max()).collect() }
     }
 
     /// Gain and offset of row `r`: scaled = gain · (x − min) − 1, or x if the row is constant.
