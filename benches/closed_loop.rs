@@ -121,7 +121,7 @@ impl PlainLoop {
         let config = ArmConfig::default();
         let (arm, sensors) = config.build().expect("arm");
         let model = config.arm.clone().frictionless();
-        let (_, (q0, qd0)) = tracking_start(&config.arm).expect("start");
+        let (_, ArmState { q: q0, qd: qd0 }) = tracking_start(&config.arm).expect("start");
         let mut me = Self {
             config,
             arm,

@@ -13,6 +13,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let params = ArmParams::default_four_link().with_base_angle(std::f64::consts::FRAC_PI_2);
     let mut sim = ArmSimulator::new(params.clone(), IntegratorSettings::default())?;
     let mut state = ArmState::at_rest(vec![0.3, -0.5, 0.7, -0.2]);
+    // Scratch space of the dynamics, made once: the loop below allocates nothing for them.
+    let (mut data, mut g) = (ArmData::new(&params), vec![0.0; 4]);
 
     let dt = 1e-3;
     let amplitude = [4.0, 3.0, 1.5, 0.6]; // N·m, above each joint's Coulomb level
@@ -26,7 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for k in 0..5000 {
         let t = k as f64 * dt;
         // Gravity compensation plus a sinusoid per joint, each at its own frequency.
-        let g = gravity_torques(&params, &state.q);
+        gravity_torques_into(&params, &mut data, &state.q, &mut g);
         let tau: Vec<f64> = (0..4).map(|i| g[i] + amplitude[i] * (t * (1.0 + i as f64)).sin()).collect();
         let x = end_effector_position(&params, &state.q);
         let mut row = vec![t];

@@ -37,3 +37,18 @@ ensure_venv() {
     cp "$req" "$stamp"
   fi
 }
+
+# ensure_rust_components NAME...: adds the rustup components (rustfmt, clippy) the toolchain
+# lacks; the test command needs them.
+ensure_rust_components() {
+  local missing=()
+  for c in "$@"; do
+    case "$c" in
+      rustfmt) cargo fmt --version >/dev/null 2>&1 || missing+=("$c") ;;
+      clippy) cargo clippy --version >/dev/null 2>&1 || missing+=("$c") ;;
+    esac
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  log "adding Rust components: ${missing[*]}"
+  rustup component add "${missing[@]}"
+}

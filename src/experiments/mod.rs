@@ -17,7 +17,9 @@ use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, Simul
 use neurarm_models::{
     FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
 };
-use neurarm_physics::arm::{inverse_dynamics_rnea, jacobian, mass_matrix, ArmParams, FrictionBranch, JointFriction};
+use neurarm_physics::arm::{
+    inverse_dynamics_rnea_into, jacobian, mass_matrix, ArmData, ArmParams, ArmState, FrictionBranch, JointFriction,
+};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{inverse_kinematics, paper_reference, pseudo_inverse, TaskSpaceGains};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
@@ -156,7 +158,7 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
         export_fmu(&FmuSpec { identifier: id.into(), model }, &[], &path)?;
         Ok(path)
     };
-    let (centre, (q_start, _)) = tracking_start(&nominal.arm)?;
+    let (centre, ArmState { q: q_start, .. }) = tracking_start(&nominal.arm)?;
     Ok(Fmus {
         arm: export("PlanarArm", ModelSpec::PlanarArm(PlanarArmSpec { config: nominal.clone(), q0: vec![0.0; 4], qd0: vec![0.0; 4] }))?,
         arm_real: export(
@@ -193,14 +195,14 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
 
 /// The reference centre and the state the tracking runs start from: on the reference at
 /// t = 0 with its velocity, so no start-up transient enters the error.
-pub fn tracking_start(arm: &ArmParams) -> Result<([f64; 2], (Vec<f64>, Vec<f64>)), String> {
+pub fn tracking_start(arm: &ArmParams) -> Result<([f64; 2], ArmState), String> {
     let centre = Vector2::new(REFERENCE_CENTRE[0], REFERENCE_CENTRE[1]);
     let (x0, xd0, _) = paper_reference(0.0, centre);
     let seed: Vec<f64> = (0..arm.dof()).map(|i| TRACKING_SEED_POSE[i % 4]).collect();
     let q0 = inverse_kinematics(arm, x0, &seed).ok_or("no inverse kinematics for the start of the reference")?;
     let pinv = pseudo_inverse(&jacobian(arm, &q0)).ok_or("singular start pose")?;
     let qd0: Vec<f64> = (&pinv * nalgebra::DVector::from_column_slice(xd0.as_slice())).iter().copied().collect();
-    Ok((REFERENCE_CENTRE, (q0, qd0)))
+    Ok((REFERENCE_CENTRE, ArmState { q: q0, qd: qd0 }))
 }
 
 fn master(e: MasterError) -> String {
@@ -248,6 +250,9 @@ pub fn parallel<T: Send, R: Send>(
 
 // ---------------------------------------------------------------------------------------
 // Friction identification
+
+/// A training pair of a friction net: (velocity [rad/s], mean torque [N·m], samples averaged).
+pub type FrictionPair = (f64, f64, usize);
 
 /// Steady states of one joint under constant torques: (torque [N·m], mean measured velocity
 /// [rad/s]) per level, and the samples of each level's last window.
@@ -393,7 +398,7 @@ pub fn friction_run(arm_fmu: &Path, controller: &Path, joint: usize, direction: 
 
 /// Bins velocity samples of width `width` over ±`limit` and averages each bin: returns
 /// (mean velocity, mean torque, count) per non-empty bin, by velocity.
-pub fn bin_friction(samples: &[(f64, f64)], width: f64, limit: f64) -> Vec<(f64, f64, usize)> {
+pub fn bin_friction(samples: &[(f64, f64)], width: f64, limit: f64) -> Vec<FrictionPair> {
     let bins = (2.0 * limit / width).round() as usize;
     let mut acc = vec![(0.0, 0.0, 0usize); bins];
     for &(v, t) in samples {
@@ -527,6 +532,7 @@ pub fn gravity_sweep(
     let hold_torque = handles(&sim, &|i| format!("ctl.tau_comp_{}", i + 1))?;
     let mut x = vec![0.0; 2 * n];
     let mut u = vec![0.0; n];
+    let (mut rigid_data, mut tau) = (ArmData::new(&rigid_body), vec![0.0; n]);
     // One step with the reference (angles, velocities) in `r` and acceleration `a`.
     let mut step = |sim: &mut Simulation, r: &[f64], a: &[f64]| -> Result<(), String> {
         sim.set_reals(&reference, r).map_err(master)?;
@@ -534,8 +540,8 @@ pub fn gravity_sweep(
         for i in 0..n {
             u[i] = a[i] + 2.0 * HOLD_RAD_S * (r[n + i] - x[n + i]) + HOLD_RAD_S * HOLD_RAD_S * (r[i] - x[i]);
         }
-        let tau = inverse_dynamics_rnea(&rigid_body, &x[..n], &x[n..], &u);
-        sim.set_reals(&hold_torque, tau.as_slice()).map_err(master)?;
+        inverse_dynamics_rnea_into(&rigid_body, &mut rigid_data, &x[..n], &x[n..], &u, &mut tau);
+        sim.set_reals(&hold_torque, &tau).map_err(master)?;
         sim.step().map_err(master)
     };
     let mut accel = vec![0.0; n];
@@ -682,7 +688,7 @@ fn closed_loop(
 /// (relative to where the system file will be, or absolute).
 pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>, settings: &Settings) -> Result<SystemSpec, String> {
     let nominal = ArmConfig::default().arm;
-    let (_, (q0, qd0)) = tracking_start(&nominal)?;
+    let (_, ArmState { q: q0, qd: qd0 }) = tracking_start(&nominal)?;
     let mut arm_parameters = BTreeMap::new();
     for i in 0..q0.len() {
         arm_parameters.insert(format!("q0_{}", i + 1), Value::Real(q0[i]));

@@ -111,7 +111,7 @@ pub fn run_paper(out: &Path, settings: &Settings, log: &mut dyn FnMut(&str)) -> 
     )?;
     b.finish_and_clear();
     let mut friction_files: [Vec<(String, PathBuf)>; 2] = [Vec::new(), Vec::new()];
-    let mut binned_all: [Vec<Vec<(f64, f64, usize)>>; 2] = [Vec::new(), Vec::new()];
+    let mut binned_all: [Vec<Vec<FrictionPair>>; 2] = [Vec::new(), Vec::new()];
     for (k, real) in [false, true].into_iter().enumerate() {
         let tag = if real { "real" } else { "sim" };
         for joint in 0..4 {
@@ -354,7 +354,7 @@ pub fn report_markdown(r: &PaperResults, settings: &Settings, total_s: f64) -> S
 
 /// The figures: friction data with the nets (Figs. 6/7), tracking (Figs. 9/10), joint runs
 /// (Figs. 11/13/14).
-fn write_plots(out: &Path, binned: &[Vec<Vec<(f64, f64, usize)>>; 2], nets: &[WeightsFile], runs: &[LoopRun]) -> Result<(), String> {
+fn write_plots(out: &Path, binned: &[Vec<Vec<FrictionPair>>; 2], nets: &[WeightsFile], runs: &[LoopRun]) -> Result<(), String> {
     use crate::report::plot::{write_png, Panel, Series, Style};
     let mut panels = Vec::new();
     for (k, tag) in ["simulated", "emulated real"].iter().enumerate() {
