@@ -193,9 +193,17 @@ impl System {
         let (tu, tv) = split_name(to)?;
         let (fi, ti) = (self.unit_index(fu)?, self.unit_index(tu)?);
         let pairs = expand_connection(from, to, fv, tv, self.units[fi].interface.outputs()).map_err(|m| MasterError::new(m).unit(fu))?;
+        // All pairs are checked before any is added, so a refused connection changes nothing.
+        let mut added: Vec<Link> = Vec::with_capacity(pairs.len());
+        let pattern = |mut e: MasterError| {
+            if fv.contains('*') {
+                e.message = format!("{} (from the pattern '{from}' → '{to}')", e.message);
+            }
+            e
+        };
         for (fv, tv) in pairs {
-            let src = self.units[fi].variable(&fv)?;
-            let dst = self.units[ti].variable(&tv)?;
+            let src = self.units[fi].variable(&fv).map_err(pattern)?;
+            let dst = self.units[ti].variable(&tv).map_err(pattern)?;
             if src.causality != Causality::Output {
                 let what = src.causality.with_article();
                 return Err(MasterError::new(format!("a connection must start at an output, not {what}")).unit(fu).variable(&fv));
@@ -212,11 +220,11 @@ impl System {
                 .unit(tu)
                 .variable(&tv));
             }
-            if self.links.iter().any(|l| l.to_unit == ti && l.to_vr == dst.value_reference && l.base == dst.base) {
+            if self.is_connected(ti, dst.value_reference, dst.base) {
                 return Err(MasterError::new("this input is already connected").unit(tu).variable(&tv));
             }
             let feeds_through = self.units[ti].interface.feedthrough_inputs.contains(&dst.value_reference);
-            let link = Link {
+            added.push(Link {
                 from_unit: fi,
                 from_variable: fv,
                 from_vr: src.value_reference,
@@ -225,9 +233,9 @@ impl System {
                 to_vr: dst.value_reference,
                 base: src.base,
                 feeds_through,
-            };
-            self.links.push(link);
+            });
         }
+        self.links.extend(added);
         Ok(self)
     }
 

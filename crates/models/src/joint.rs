@@ -10,7 +10,7 @@ use fmi2_export::{BooleanVar, Model, ModelDescription, ModelError, RealVar, Stat
 use serde::{Deserialize, Serialize};
 
 use crate::units::{NEWTON_METRE, NEWTON_METRE_PER_RADIAN, NEWTON_METRE_SECOND_PER_RADIAN, RADIAN, RADIAN_PER_SECOND};
-use crate::{describe, BuildError, ModelKind};
+use crate::{describe, per_joint, BuildError, ModelKind};
 
 /// Spec of a joint controller.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -82,19 +82,18 @@ impl JointControllerModel {
             return Err(BuildError::Spec("the controller needs at least one joint".into()));
         }
         let mut b = TableBuilder::new();
-        let per_joint =
-            |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..joints).map(|i| f(b, i)).collect::<Vec<_>>();
-        let q = per_joint(&mut b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Measured angle of joint {}", i + 1)));
-        let qd = per_joint(&mut b, &|b, i| {
+        let q =
+            per_joint(&mut b, joints, |b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Measured angle of joint {}", i + 1)));
+        let qd = per_joint(&mut b, joints, |b, i| {
             b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
         });
-        let tau_comp = per_joint(&mut b, &|b, i| {
+        let tau_comp = per_joint(&mut b, joints, |b, i| {
             b.input(format!("tau_comp_{}", i + 1), NEWTON_METRE, 0.0, format!("Compensating (or feed-forward) torque of joint {}", i + 1))
         });
-        let q_ref = per_joint(&mut b, &|b, i| {
+        let q_ref = per_joint(&mut b, joints, |b, i| {
             b.input(format!("q_ref_{}", i + 1), RADIAN, 0.0, format!("Target angle of joint {} when use_sequence is false", i + 1))
         });
-        let qd_ref = per_joint(&mut b, &|b, i| {
+        let qd_ref = per_joint(&mut b, joints, |b, i| {
             b.input(
                 format!("qd_ref_{}", i + 1),
                 RADIAN_PER_SECOND,
@@ -102,17 +101,17 @@ impl JointControllerModel {
                 format!("Target velocity of joint {} when use_sequence is false", i + 1),
             )
         });
-        let tau = per_joint(&mut b, &|b, i| {
+        let tau = per_joint(&mut b, joints, |b, i| {
             let deps = [q[i], qd[i], tau_comp[i], q_ref[i], qd_ref[i]];
             b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &deps)
         });
-        let target = per_joint(&mut b, &|b, i| {
+        let target = per_joint(&mut b, joints, |b, i| {
             b.output(format!("q_target_{}", i + 1), RADIAN, format!("Active target angle of joint {}", i + 1), &[q_ref[i]])
         });
-        let kp = per_joint(&mut b, &|b, i| {
+        let kp = per_joint(&mut b, joints, |b, i| {
             b.tunable(format!("kp_{}", i + 1), NEWTON_METRE_PER_RADIAN, kp, format!("Position gain of joint {}", i + 1))
         });
-        let kd = per_joint(&mut b, &|b, i| {
+        let kd = per_joint(&mut b, joints, |b, i| {
             b.tunable(
                 format!("kd_{}", i + 1),
                 NEWTON_METRE_SECOND_PER_RADIAN,

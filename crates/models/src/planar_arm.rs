@@ -127,6 +127,19 @@ fn set_optional_entry(list: &mut Option<Vec<f64>>, n: usize, i: usize, v: f64) {
     }
 }
 
+/// A parameter of one link: one field of its [`LinkParams`](neurarm_physics::arm::LinkParams).
+macro_rules! link {
+    ($name:literal, $unit:expr, $desc:literal, $field:ident) => {
+        JointParameter {
+            name: $name,
+            unit: Some($unit),
+            description: $desc,
+            get: |c, i| c.arm.links[i].$field,
+            set: |c, i, v| c.arm.links[i].$field = v,
+        }
+    };
+}
+
 /// A friction parameter: one field of one direction's branch.
 macro_rules! friction {
     ($name:literal, $unit:expr, $desc:literal, $positive:expr, $field:ident) => {
@@ -171,34 +184,10 @@ macro_rules! hardware_entry {
 
 /// Parameters of each joint, in table order; the FMU variable of joint i is `{name}_{i}`.
 pub const JOINT_PARAMETERS: [JointParameter; 16] = [
-    JointParameter {
-        name: "length",
-        unit: Some(METRE),
-        description: "Length of link {}",
-        get: |c, i| c.arm.links[i].length_m,
-        set: |c, i, v| c.arm.links[i].length_m = v,
-    },
-    JointParameter {
-        name: "mass",
-        unit: Some(KILOGRAM),
-        description: "Mass of link {}",
-        get: |c, i| c.arm.links[i].mass_kg,
-        set: |c, i, v| c.arm.links[i].mass_kg = v,
-    },
-    JointParameter {
-        name: "com",
-        unit: Some(METRE),
-        description: "Distance from joint {} to the centre of mass of its link",
-        get: |c, i| c.arm.links[i].com_m,
-        set: |c, i, v| c.arm.links[i].com_m = v,
-    },
-    JointParameter {
-        name: "inertia",
-        unit: Some(KILOGRAM_METRE_SQUARED),
-        description: "Moment of inertia of link {} about its centre of mass",
-        get: |c, i| c.arm.links[i].inertia_kgm2,
-        set: |c, i, v| c.arm.links[i].inertia_kgm2 = v,
-    },
+    link!("length", METRE, "Length of link {}", length_m),
+    link!("mass", KILOGRAM, "Mass of link {}", mass_kg),
+    link!("com", METRE, "Distance from joint {} to the centre of mass of its link", com_m),
+    link!("inertia", KILOGRAM_METRE_SQUARED, "Moment of inertia of link {} about its centre of mass", inertia_kgm2),
     friction!("coulomb_pos", NEWTON_METRE, "Coulomb friction of joint {}, positive velocity", true, coulomb_nm),
     friction!("static_pos", NEWTON_METRE, "Static (breakaway) friction of joint {}, positive velocity", true, static_nm),
     friction!(

@@ -5,6 +5,7 @@
 
 use fmi2_export::{BooleanVar, RealVar, TableBuilder, Values};
 
+use crate::per_joint;
 use crate::units::{NEWTON_METRE, RADIAN, RADIAN_PER_SECOND};
 
 /// The variables of a compensator.
@@ -41,13 +42,12 @@ impl CompensatorPorts {
     /// Declares the ports of a compensator of `joints` joints with `parts` in `b`; the switches
     /// start as `enable`, and a part the compensator lacks starts switched off.
     pub fn declare(b: &mut TableBuilder, joints: usize, parts: Parts, enable: (bool, bool)) -> Self {
-        let per_joint =
-            |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..joints).map(|i| f(b, i)).collect::<Vec<_>>();
-        let q = per_joint(b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Angle of joint {}", i + 1)));
-        let qd = per_joint(b, &|b, i| b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Velocity of joint {}", i + 1)));
+        let q = per_joint(b, joints, |b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Angle of joint {}", i + 1)));
+        let qd =
+            per_joint(b, joints, |b, i| b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Velocity of joint {}", i + 1)));
         let source = parts.source;
         let capital = |s: &str| s[..1].to_uppercase() + &s[1..];
-        let friction = per_joint(b, &|b, i| {
+        let friction = per_joint(b, joints, |b, i| {
             let deps: &[RealVar] = if parts.friction { std::slice::from_ref(&qd[i]) } else { &[] };
             b.output(
                 format!("tau_friction_{}", i + 1),
@@ -56,11 +56,11 @@ impl CompensatorPorts {
                 deps,
             )
         });
-        let gravity = per_joint(b, &|b, i| {
+        let gravity = per_joint(b, joints, |b, i| {
             let deps: &[RealVar] = if parts.gravity { &q } else { &[] };
             b.output(format!("tau_gravity_{}", i + 1), NEWTON_METRE, format!("{} gravity torque of joint {}", capital(source), i + 1), deps)
         });
-        let total = per_joint(b, &|b, i| {
+        let total = per_joint(b, joints, |b, i| {
             let mut deps: Vec<RealVar> = if parts.gravity { q.clone() } else { Vec::new() };
             if parts.friction {
                 deps.push(qd[i]);

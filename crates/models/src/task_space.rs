@@ -15,7 +15,7 @@ use neurarm_physics::control::{paper_reference, task_space_torque_into, TaskRefe
 use serde::{Deserialize, Serialize};
 
 use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN, RADIAN_PER_SECOND};
-use crate::{describe, BuildError, ModelKind};
+use crate::{describe, per_joint, BuildError, ModelKind};
 
 /// Spec of a task-space controller.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -79,13 +79,12 @@ impl TaskSpaceControllerModel {
             return Err(BuildError::Spec(format!("{} start angles for {n} joints", q_start.len())));
         }
         let mut b = TableBuilder::new();
-        let per_joint = |b: &mut TableBuilder, f: &dyn Fn(&mut TableBuilder, usize) -> RealVar| (0..n).map(|i| f(b, i)).collect::<Vec<_>>();
         let q =
-            per_joint(&mut b, &|b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
-        let qd = per_joint(&mut b, &|b, i| {
+            per_joint(&mut b, n, |b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
+        let qd = per_joint(&mut b, n, |b, i| {
             b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
         });
-        let tau_comp = per_joint(&mut b, &|b, i| {
+        let tau_comp = per_joint(&mut b, n, |b, i| {
             b.input(
                 format!("tau_comp_{}", i + 1),
                 NEWTON_METRE,
@@ -94,8 +93,9 @@ impl TaskSpaceControllerModel {
             )
         });
         let all: Vec<RealVar> = q.iter().chain(&qd).chain(&tau_comp).copied().collect();
-        let tau =
-            per_joint(&mut b, &|b, i| b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all));
+        let tau = per_joint(&mut b, n, |b, i| {
+            b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all)
+        });
         let reference = [b.output("x_ref", METRE, "Reference x_d(t)", &[]), b.output("y_ref", METRE, "Reference y_d(t)", &[])];
         let error = [b.output("error_x", METRE, "Tracking error x_d − x", &q), b.output("error_y", METRE, "Tracking error y_d − y", &q)];
         let kp = b.tunable("kp", PER_SECOND_SQUARED, gains.kp, "Position gain K_p");

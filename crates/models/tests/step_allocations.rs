@@ -2,9 +2,10 @@
 //! instance (the code the C ABI calls), initialised and driven with changing inputs, while a
 //! counting global allocator watches the stepping thread.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+#[path = "../../physics/tests/support/counting.rs"]
+mod counting;
 
+use counting::allocations_during;
 use fmi2_export::instance::{Instance, Status};
 use fmi2_export::Model;
 use nalgebra::{DMatrix, DVector};
@@ -13,36 +14,6 @@ use neurarm_physics::arm::ArmParams;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::TaskSpaceGains;
 use neurarm_physics::nn::{MinMaxScaling, Mlp, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
-
-struct Counting;
-
-thread_local! {
-    static WATCHING: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if WATCHING.with(Cell::get) {
-            COUNT.with(|c| c.set(c.get() + 1));
-        }
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-fn allocations_during(f: impl FnOnce()) -> usize {
-    COUNT.with(|c| c.set(0));
-    WATCHING.with(|w| w.set(true));
-    f();
-    WATCHING.with(|w| w.set(false));
-    COUNT.with(Cell::get)
-}
 
 /// A small net with fixed weights, written as a weights file.
 fn net_file(n_in: usize, hidden: usize, n_out: usize) -> WeightsFile {

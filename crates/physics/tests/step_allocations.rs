@@ -1,39 +1,10 @@
 //! A step allocates nothing: a counting global allocator watches the stepping thread.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+#[path = "support/counting.rs"]
+mod counting;
 
+use counting::allocations_during;
 use neurarm_physics::arm::*;
-
-struct Counting;
-
-thread_local! {
-    static WATCHING: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if WATCHING.with(Cell::get) {
-            COUNT.with(|c| c.set(c.get() + 1));
-        }
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static ALLOCATOR: Counting = Counting;
-
-fn allocations_during(f: impl FnOnce()) -> usize {
-    COUNT.with(|c| c.set(0));
-    WATCHING.with(|w| w.set(true));
-    f();
-    WATCHING.with(|w| w.set(false));
-    COUNT.with(Cell::get)
-}
 
 #[test]
 fn stepping_allocates_nothing() {
@@ -84,16 +55,14 @@ fn training_epochs_allocate_only_the_gemm_buffer() {
     let mut counted = None;
     train(&x, &t, &settings, &mut |e| {
         if e.epoch == 1 {
-            COUNT.with(|c| c.set(0));
-            WATCHING.with(|w| w.set(true));
+            counting::start();
         } else if e.epoch == settings.epochs {
-            WATCHING.with(|w| w.set(false));
-            counted = Some(COUNT.with(Cell::get));
+            counted = Some(counting::stop());
         }
         epochs_seen += 1;
     })
     .unwrap();
-    WATCHING.with(|w| w.set(false));
+    counting::stop();
     assert_eq!(epochs_seen, 40, "training ran all epochs");
     // Our own code allocates nothing; matrixmultiply allocates its packing buffer once per
     // matrix product, and an epoch does exactly one product (the Gram matrix of [z; ã]).

@@ -1,0 +1,46 @@
+//! A global allocator that counts the allocations made on a thread while it watches, for the
+//! tests that a step allocates nothing. Shared by this crate's and `neurarm-models`' tests.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+struct Counting;
+
+thread_local! {
+    static WATCHING: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if WATCHING.with(Cell::get) {
+            COUNT.with(|c| c.set(c.get() + 1));
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// Starts counting this thread's allocations from 0.
+pub fn start() {
+    COUNT.with(|c| c.set(0));
+    WATCHING.with(|w| w.set(true));
+}
+
+/// Stops counting; the allocations since [`start`].
+pub fn stop() -> usize {
+    WATCHING.with(|w| w.set(false));
+    COUNT.with(Cell::get)
+}
+
+/// The allocations `f` makes on this thread.
+pub fn allocations_during(f: impl FnOnce()) -> usize {
+    start();
+    f();
+    stop()
+}
