@@ -33,6 +33,23 @@ handle! {
     StringVar;
 }
 
+/// The adders of the base types without a unit, alike but for the type.
+macro_rules! non_real_adders {
+    ($(#[$doc:meta] $name:ident, $handle:ident, $t:ty, $kind:ident;)*) => {$(
+        #[$doc]
+        pub fn $name(
+            &mut self,
+            name: impl Into<String>,
+            causality: Causality,
+            variability: Variability,
+            start: Option<$t>,
+            description: impl Into<String>,
+        ) -> $handle {
+            $handle(self.push(name, causality, variability, Kind::$kind { start }, description))
+        }
+    )*};
+}
+
 /// Builds a variable table, numbering value references per base type in order of addition.
 #[derive(Debug)]
 pub struct TableBuilder {
@@ -101,40 +118,13 @@ impl TableBuilder {
         RealVar(self.push(name, causality, variability, Kind::Real { start, unit: unit.into() }, description))
     }
 
-    /// Adds an integer variable.
-    pub fn integer(
-        &mut self,
-        name: impl Into<String>,
-        causality: Causality,
-        variability: Variability,
-        start: Option<i32>,
-        description: impl Into<String>,
-    ) -> IntegerVar {
-        IntegerVar(self.push(name, causality, variability, Kind::Integer { start }, description))
-    }
-
-    /// Adds a Boolean variable.
-    pub fn boolean(
-        &mut self,
-        name: impl Into<String>,
-        causality: Causality,
-        variability: Variability,
-        start: Option<bool>,
-        description: impl Into<String>,
-    ) -> BooleanVar {
-        BooleanVar(self.push(name, causality, variability, Kind::Boolean { start }, description))
-    }
-
-    /// Adds a string variable.
-    pub fn string(
-        &mut self,
-        name: impl Into<String>,
-        causality: Causality,
-        variability: Variability,
-        start: Option<String>,
-        description: impl Into<String>,
-    ) -> StringVar {
-        StringVar(self.push(name, causality, variability, Kind::String { start }, description))
+    non_real_adders! {
+        /// Adds an integer variable.
+        integer, IntegerVar, i32, Integer;
+        /// Adds a Boolean variable.
+        boolean, BooleanVar, bool, Boolean;
+        /// Adds a string variable.
+        string, StringVar, String, String;
     }
 
     /// Adds a continuous real input with its start value, in `unit`.

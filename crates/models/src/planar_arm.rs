@@ -226,43 +226,25 @@ pub const JOINT_PARAMETERS: [JointParameter; 16] = [
     hardware_entry!("encoder_counts", None, "Encoder counts per revolution of joint {} (0: exact angles)", encoder_counts_per_rev),
 ];
 
+/// A parameter of the whole arm: one field of the configuration.
+macro_rules! arm {
+    ($name:literal, $unit:expr, $desc:literal, $($field:ident).+) => {
+        ArmParameter { name: $name, unit: Some($unit), description: $desc, get: |c| c.$($field).+, set: |c, v| c.$($field).+ = v }
+    };
+}
+
 /// Parameters of the whole arm, in table order.
 pub const ARM_PARAMETERS: [ArmParameter; 5] = [
-    ArmParameter {
-        name: "gravity",
-        unit: Some(METRE_PER_SECOND_SQUARED),
-        description: "Magnitude of gravitational acceleration",
-        get: |c| c.arm.gravity_m_s2,
-        set: |c, v| c.arm.gravity_m_s2 = v,
-    },
-    ArmParameter {
-        name: "base_angle",
-        unit: Some(RADIAN),
-        description: "Tilt of the arm's plane: 0 horizontal (no gravity torque), pi/2 vertical (gravity along -y)",
-        get: |c| c.arm.base_angle_rad,
-        set: |c, v| c.arm.base_angle_rad = v,
-    },
-    ArmParameter {
-        name: "internal_step",
-        unit: Some(Unit::SECOND),
-        description: "Longest RK4 sub-step inside a communication step",
-        get: |c| c.integrator.internal_step_s,
-        set: |c, v| c.integrator.internal_step_s = v,
-    },
-    ArmParameter {
-        name: "q_noise_std",
-        unit: Some(RADIAN),
-        description: "Standard deviation of the noise on measured angles",
-        get: |c| c.hardware.q_noise_std_rad,
-        set: |c, v| c.hardware.q_noise_std_rad = v,
-    },
-    ArmParameter {
-        name: "qd_noise_std",
-        unit: Some(RADIAN_PER_SECOND),
-        description: "Standard deviation of the noise on measured velocities",
-        get: |c| c.hardware.qd_noise_std_rad_s,
-        set: |c, v| c.hardware.qd_noise_std_rad_s = v,
-    },
+    arm!("gravity", METRE_PER_SECOND_SQUARED, "Magnitude of gravitational acceleration", arm.gravity_m_s2),
+    arm!(
+        "base_angle",
+        RADIAN,
+        "Tilt of the arm's plane: 0 horizontal (no gravity torque), pi/2 vertical (gravity along -y)",
+        arm.base_angle_rad
+    ),
+    arm!("internal_step", Unit::SECOND, "Longest RK4 sub-step inside a communication step", integrator.internal_step_s),
+    arm!("q_noise_std", RADIAN, "Standard deviation of the noise on measured angles", hardware.q_noise_std_rad),
+    arm!("qd_noise_std", RADIAN_PER_SECOND, "Standard deviation of the noise on measured velocities", hardware.qd_noise_std_rad_s),
 ];
 
 /// Value references of the arm's variables.
