@@ -2,7 +2,7 @@
 //! controller; 1 ms communication step), one step at a time:
 //! - `master`: the three FMUs through our master (Gauss–Seidel, nothing recorded);
 //! - `in_process`: the same computation as plain Rust calls, no FMI: arm step and sensors,
-//!   the four friction nets, the task-space law and computed torque.
+//!   the four friction nets, the task-space law and computed torque, all in preallocated data.
 //!
 //! The FMUs and nets go to `<target>/closed-loop-bench/` (its `system.toml` is the loop), where
 //! `benches/python/loop_ratio.py` has fmpy drive the same FMUs. `scripts/bench-loop` runs both
@@ -20,7 +20,7 @@ use neurarm::export::export_fmu;
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
 use neurarm_physics::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::control::{computed_torque, paper_reference, task_space_acceleration, TaskReference, TaskSpaceGains};
+use neurarm_physics::control::{paper_reference, task_space_torque_into, TaskReference, TaskSpaceData, TaskSpaceGains};
 use neurarm_physics::nn::{train, Mlp, Signal, TrainSettings, WeightsFile};
 
 const STEP: f64 = 1e-3;
@@ -106,6 +106,7 @@ struct PlainLoop {
     arm: ArmSimulator,
     sensors: Sensors,
     model: ArmParams,
+    control: TaskSpaceData,
     nets: Vec<Mlp>,
     state: ArmState,
     time: f64,
@@ -126,6 +127,7 @@ impl PlainLoop {
             config,
             arm,
             sensors,
+            control: TaskSpaceData::new(&model),
             model,
             nets,
             state: ArmState { q: q0, qd: qd0 },
@@ -151,8 +153,9 @@ impl PlainLoop {
         let (position, velocity, acceleration) = paper_reference(self.time, centre);
         black_box(position - end_effector_position(&self.model, &self.q));
         let reference = TaskReference { position, velocity, acceleration };
-        let u = task_space_acceleration(&self.model, &self.q, &self.qd, &reference, &TaskSpaceGains::default()).expect("control law");
-        self.tau.copy_from_slice(computed_torque(&self.model, &self.q, &self.qd, &u, &self.comp).as_slice());
+        let gains = TaskSpaceGains::default();
+        let ok = task_space_torque_into(&self.model, &mut self.control, &self.q, &self.qd, &reference, &gains, &self.comp, &mut self.tau);
+        assert!(ok, "control law");
     }
 
     /// One communication step; the arm's end-effector outputs (x, y, ẋ, ẏ) after it.
