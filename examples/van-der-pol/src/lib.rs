@@ -1,6 +1,5 @@
-//! The Van der Pol oscillator `ẍ = μ (1 − x²) ẋ − x + u` as an FMI 2.0 Co-Simulation FMU,
-//! written on `fmi2-export`: the whole model, its variable table, its state and its C ABI.
-//! ([`package`] makes the `.fmu` of the built library.)
+//! The Van der Pol oscillator `ẍ = μ (1 − x²) ẋ − x + u` as an FMI 2.0 Co-Simulation FMU on
+//! `fmi2-export`: model, variable table, state and C ABI. [`package`] makes the `.fmu`.
 
 pub mod package;
 
@@ -15,8 +14,7 @@ pub struct VanDerPol {
 }
 
 impl VanDerPol {
-    /// The model, with its interface: input `u`, outputs `x`, `v` = ẋ, tunable `mu`, start
-    /// values `x0`, `v0`.
+    /// The model: input `u`, outputs `x`, `v` = ẋ, tunable `mu`, start values `x0`, `v0`.
     pub fn new() -> Result<Self, ModelError> {
         let mut b = TableBuilder::new();
         let u = b.input("u", None, 0.0, "Forcing");
@@ -27,11 +25,6 @@ impl VanDerPol {
         let v0 = b.parameter("v0", None, 0.0, "Initial velocity");
         let description = ModelDescription::new("VanDerPol", "Van der Pol oscillator (fmi2-export example)", b.finish())?;
         Ok(Self { description, vars: [u, x, v, mu, x0, v0], state: [0.0; 2] })
-    }
-
-    fn write(&self, values: &mut Values) {
-        values[self.vars[1]] = self.state[0];
-        values[self.vars[2]] = self.state[1];
     }
 }
 
@@ -47,7 +40,7 @@ impl Model for VanDerPol {
 
     fn initialize(&mut self, values: &mut Values, _start: f64) -> Result<(), ModelError> {
         self.state = [values[self.vars[4]], values[self.vars[5]]];
-        self.write(values);
+        values.write_reals(&self.vars[1..3], &self.state);
         Ok(())
     }
 
@@ -68,7 +61,7 @@ impl Model for VanDerPol {
         if !self.state.iter().all(|x| x.is_finite()) {
             return Err(ModelError::msg(format!("the state diverged to {:?} (mu = {mu}, u = {u})", self.state)));
         }
-        self.write(values);
+        values.write_reals(&self.vars[1..3], &self.state);
         Ok(())
     }
 
