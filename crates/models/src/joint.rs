@@ -9,6 +9,7 @@ use std::path::Path;
 use fmi2_export::{BooleanVar, Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use serde::{Deserialize, Serialize};
 
+use crate::ports::ControllerInputs;
 use crate::units::{NEWTON_METRE, NEWTON_METRE_PER_RADIAN, NEWTON_METRE_SECOND_PER_RADIAN, RADIAN, RADIAN_PER_SECOND};
 use crate::{describe, per_joint, BuildError, ModelKind};
 
@@ -82,14 +83,7 @@ impl JointControllerModel {
             return Err(BuildError::Spec("the controller needs at least one joint".into()));
         }
         let mut b = TableBuilder::new();
-        let q =
-            per_joint(&mut b, joints, |b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Measured angle of joint {}", i + 1)));
-        let qd = per_joint(&mut b, joints, |b, i| {
-            b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
-        });
-        let tau_comp = per_joint(&mut b, joints, |b, i| {
-            b.input(format!("tau_comp_{}", i + 1), NEWTON_METRE, 0.0, format!("Compensating (or feed-forward) torque of joint {}", i + 1))
-        });
+        let ControllerInputs { q, qd, tau_comp } = ControllerInputs::declare(&mut b, joints, &vec![0.0; joints]);
         let q_ref = per_joint(&mut b, joints, |b, i| {
             b.input(format!("q_ref_{}", i + 1), RADIAN, 0.0, format!("Target angle of joint {} when use_sequence is false", i + 1))
         });

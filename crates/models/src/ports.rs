@@ -1,7 +1,10 @@
-//! The port contract every compensator keeps, so one can stand in for another in a loop:
-//! inputs `q_i` [rad] and `qd_i` [rad/s]; outputs per joint the friction part
-//! `tau_friction_i`, the gravity part `tau_gravity_i` and their sum over the enabled parts
-//! `tau_comp_i` [N·m]; tunable Boolean parameters `enable_friction`, `enable_gravity`.
+//! The port contracts that let blocks stand in for one another in a loop.
+//!
+//! Every compensator has inputs `q_i` [rad] and `qd_i` [rad/s]; outputs per joint the
+//! friction part `tau_friction_i`, the gravity part `tau_gravity_i` and their sum over the
+//! enabled parts `tau_comp_i` [N·m]; tunable Boolean parameters `enable_friction`,
+//! `enable_gravity`. Every controller has the inputs a compensator's `tau_comp_i` and an arm's
+//! measurements feed: `q_i`, `qd_i`, `tau_comp_i`.
 
 use fmi2_export::{BooleanVar, RealVar, TableBuilder, Values};
 
@@ -87,5 +90,34 @@ impl CompensatorPorts {
         values[self.friction[i]] = friction;
         values[self.gravity[i]] = gravity;
         values[self.total[i]] = friction + gravity;
+    }
+}
+
+/// The inputs every controller has: measured angles and velocities, and a compensating torque
+/// added to its command.
+#[derive(Clone, Debug)]
+pub struct ControllerInputs {
+    /// Measured angles [rad].
+    pub q: Vec<RealVar>,
+    /// Measured velocities [rad/s].
+    pub qd: Vec<RealVar>,
+    /// Compensating (or feed-forward) torques [N·m].
+    pub tau_comp: Vec<RealVar>,
+}
+
+impl ControllerInputs {
+    /// Declares them in `b` for `joints` joints, the angles starting at `q_start` [rad].
+    pub fn declare(b: &mut TableBuilder, joints: usize, q_start: &[f64]) -> Self {
+        let q =
+            per_joint(b, joints, |b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
+        let qd = per_joint(b, joints, |b, i| {
+            b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
+        });
+        let tau_comp = per_joint(b, joints, |b, i| {
+            let what =
+                format!("Compensating (or feed-forward) torque added to the command of joint {} (a compensator's tau_comp, or 0)", i + 1);
+            b.input(format!("tau_comp_{}", i + 1), NEWTON_METRE, 0.0, what)
+        });
+        Self { q, qd, tau_comp }
     }
 }

@@ -14,7 +14,8 @@ use neurarm_physics::arm::{end_effector_position, ArmParams};
 use neurarm_physics::control::{paper_reference, task_space_torque_into, TaskReference, TaskSpaceData, TaskSpaceGains};
 use serde::{Deserialize, Serialize};
 
-use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN, RADIAN_PER_SECOND};
+use crate::ports::ControllerInputs;
+use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED};
 use crate::{describe, per_joint, BuildError, ModelKind};
 
 /// Spec of a task-space controller.
@@ -79,19 +80,7 @@ impl TaskSpaceControllerModel {
             return Err(BuildError::Spec(format!("{} start angles for {n} joints", q_start.len())));
         }
         let mut b = TableBuilder::new();
-        let q =
-            per_joint(&mut b, n, |b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
-        let qd = per_joint(&mut b, n, |b, i| {
-            b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
-        });
-        let tau_comp = per_joint(&mut b, n, |b, i| {
-            b.input(
-                format!("tau_comp_{}", i + 1),
-                NEWTON_METRE,
-                0.0,
-                format!("Compensating torque added to joint {} (friction model, NN, or 0)", i + 1),
-            )
-        });
+        let ControllerInputs { q, qd, tau_comp } = ControllerInputs::declare(&mut b, n, q_start);
         let all: Vec<RealVar> = q.iter().chain(&qd).chain(&tau_comp).copied().collect();
         let tau = per_joint(&mut b, n, |b, i| {
             b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all)
