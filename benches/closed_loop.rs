@@ -14,13 +14,15 @@ use std::path::PathBuf;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use fmi2_cosim::System;
-use nalgebra::{DMatrix, Vector2};
-use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Settings, REFERENCE_CENTRE};
+use nalgebra::DMatrix;
+use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Settings};
 use neurarm::export::export_fmu;
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
 use neurarm_physics::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::control::{paper_reference, task_space_torque_into, TaskReference, TaskSpaceData, TaskSpaceGains};
+use neurarm_physics::control::{
+    scaled_reference, task_space_torque_into, ReferencePlacement, TaskReference, TaskSpaceData, TaskSpaceGains,
+};
 use neurarm_physics::nn::{train, Mlp, Signal, TrainSettings, WeightsFile};
 
 const STEP: f64 = 1e-3;
@@ -106,6 +108,7 @@ struct PlainLoop {
     arm: ArmSimulator,
     sensors: Sensors,
     model: ArmParams,
+    placement: ReferencePlacement,
     control: TaskSpaceData,
     nets: Vec<Mlp>,
     state: ArmState,
@@ -122,12 +125,14 @@ impl PlainLoop {
         let config = ArmConfig::default();
         let (arm, sensors) = config.build().expect("arm");
         let model = config.arm.clone().frictionless();
-        let (_, ArmState { q: q0, qd: qd0 }) = tracking_start(&config.arm).expect("start");
+        let placement = ReferencePlacement::for_arm(&config.arm);
+        let ArmState { q: q0, qd: qd0 } = tracking_start(&config.arm, &placement).expect("start");
         let mut me = Self {
             config,
             arm,
             sensors,
             control: TaskSpaceData::new(&model),
+            placement,
             model,
             nets,
             state: ArmState { q: q0, qd: qd0 },
@@ -149,8 +154,7 @@ impl PlainLoop {
             net.evaluate_into(&[self.qd[j]], &mut self.hidden, &mut out);
             self.comp[j] = out[0];
         }
-        let centre = Vector2::new(REFERENCE_CENTRE[0], REFERENCE_CENTRE[1]);
-        let (position, velocity, acceleration) = paper_reference(self.time, centre);
+        let (position, velocity, acceleration) = scaled_reference(self.time, self.placement.centre, self.placement.scale);
         black_box(position - end_effector_position(&self.model, &self.q));
         let reference = TaskReference { position, velocity, acceleration };
         let gains = TaskSpaceGains::default();

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use nalgebra::{DMatrix, Vector2};
+use nalgebra::DMatrix;
 
 use crate::export::export_fmu;
 use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, Simulation, SimulationSpec, System, SystemSpec, Value};
@@ -21,13 +21,8 @@ use neurarm_physics::arm::{
     inverse_dynamics_rnea_into, jacobian, mass_matrix, ArmData, ArmParams, ArmState, FrictionBranch, JointFriction,
 };
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::control::{inverse_kinematics, paper_reference, pseudo_inverse, TaskSpaceGains};
+use neurarm_physics::control::{inverse_kinematics, pseudo_inverse, scaled_reference, ReferencePlacement, TaskSpaceGains};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
-
-/// Centre of the task-space reference [m]: the curve spans x ∈ c_x ± 0.35, y ∈ c_y − 0.30 …
-/// c_y + 0.17, so with c = (0.45, 0.10) it stays between 0.1 m and 0.85 m from the base of
-/// the 1 m arm: inside the workspace, away from the stretched (singular) pose.
-pub const REFERENCE_CENTRE: [f64; 2] = [0.45, 0.10];
 
 /// Pose the inverse kinematics for the tracking start is seeded from [rad]: an elbow-up
 /// pose whose links are far from aligned.
@@ -158,7 +153,8 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
         export_fmu(&FmuSpec { identifier: id.into(), model }, &[], &path)?;
         Ok(path)
     };
-    let (centre, ArmState { q: q_start, .. }) = tracking_start(&nominal.arm)?;
+    let placement = ReferencePlacement::for_arm(&nominal.arm);
+    let ArmState { q: q_start, .. } = tracking_start(&nominal.arm, &placement)?;
     Ok(Fmus {
         arm: export("PlanarArm", ModelSpec::PlanarArm(PlanarArmSpec { config: nominal.clone(), q0: vec![0.0; 4], qd0: vec![0.0; 4] }))?,
         arm_real: export(
@@ -170,7 +166,8 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
             ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
                 model: nominal.arm.clone().frictionless(),
                 gains: TaskSpaceGains::default(),
-                centre,
+                centre: [placement.centre.x, placement.centre.y],
+                scale: placement.scale,
                 q_start,
             }),
         )?,
@@ -193,16 +190,19 @@ pub fn build_fmus(dir: &Path) -> Result<Fmus, String> {
     })
 }
 
-/// The reference centre and the state the tracking runs start from: on the reference at
-/// t = 0 with its velocity, so no start-up transient enters the error.
-pub fn tracking_start(arm: &ArmParams) -> Result<([f64; 2], ArmState), String> {
-    let centre = Vector2::new(REFERENCE_CENTRE[0], REFERENCE_CENTRE[1]);
-    let (x0, xd0, _) = paper_reference(0.0, centre);
+/// The state the tracking runs start from: on the reference placed by `placement` at t = 0,
+/// with its velocity, so no start-up transient enters the error. The pose comes from inverse
+/// kinematics seeded with [`TRACKING_SEED_POSE`] (joint i takes entry i mod 4). Fails, saying
+/// why, when the arm cannot hold the curve or the inverse kinematics finds no pose.
+pub fn tracking_start(arm: &ArmParams, placement: &ReferencePlacement) -> Result<ArmState, String> {
+    placement.check(arm).map_err(|e| e.to_string())?;
+    let (x0, xd0, _) = scaled_reference(0.0, placement.centre, placement.scale);
     let seed: Vec<f64> = (0..arm.dof()).map(|i| TRACKING_SEED_POSE[i % 4]).collect();
-    let q0 = inverse_kinematics(arm, x0, &seed).ok_or("no inverse kinematics for the start of the reference")?;
+    let q0 = inverse_kinematics(arm, x0, &seed)
+        .ok_or_else(|| format!("no joint angles put the end effector at the reference's start ({:.3}, {:.3}) m", x0.x, x0.y))?;
     let pinv = pseudo_inverse(&jacobian(arm, &q0)).ok_or("singular start pose")?;
     let qd0: Vec<f64> = (&pinv * nalgebra::DVector::from_column_slice(xd0.as_slice())).iter().copied().collect();
-    Ok((REFERENCE_CENTRE, ArmState { q: q0, qd: qd0 }))
+    Ok(ArmState { q: q0, qd: qd0 })
 }
 
 fn master(e: MasterError) -> String {
@@ -688,7 +688,7 @@ fn closed_loop(
 /// (relative to where the system file will be, or absolute).
 pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>, settings: &Settings) -> Result<SystemSpec, String> {
     let nominal = ArmConfig::default().arm;
-    let (_, ArmState { q: q0, qd: qd0 }) = tracking_start(&nominal)?;
+    let ArmState { q: q0, qd: qd0 } = tracking_start(&nominal, &ReferencePlacement::for_arm(&nominal))?;
     let mut arm_parameters = BTreeMap::new();
     for i in 0..q0.len() {
         arm_parameters.insert(format!("q0_{}", i + 1), Value::Real(q0[i]));

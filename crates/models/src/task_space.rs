@@ -1,6 +1,6 @@
 //! The `TaskSpaceController` FMU: task-space computed torque for the redundant planar arm,
-//! tracking the paper's reference `x_d(t) = c + (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))`
-//! [m] around the centre c:
+//! tracking the paper's reference `x_d(t) = c + s (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))`
+//! [m] around the centre c, scaled by s:
 //! `u = J⁺ (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J⁺J) q̇`,
 //! `τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + τ_comp`, with Ĥ, Ĉ, ĝ from the controller's model of the
 //! arm (friction is left to `tau_comp`). Static in its inputs (direct feedthrough); the
@@ -11,7 +11,7 @@ use std::path::Path;
 use fmi2_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use nalgebra::Vector2;
 use neurarm_physics::arm::{end_effector_position, ArmParams};
-use neurarm_physics::control::{paper_reference, task_space_torque_into, TaskReference, TaskSpaceData, TaskSpaceGains};
+use neurarm_physics::control::{scaled_reference, task_space_torque_into, TaskReference, TaskSpaceData, TaskSpaceGains};
 use serde::{Deserialize, Serialize};
 
 use crate::ports::ControllerInputs;
@@ -28,18 +28,26 @@ pub struct TaskSpaceControllerSpec {
     pub gains: TaskSpaceGains,
     /// Default centre of the reference [m].
     pub centre: [f64; 2],
+    /// Default scale of the reference (1: the paper's size).
+    #[serde(default = "unit_scale")]
+    pub scale: f64,
     /// Start values of the angle inputs [rad]: a pose where J has full rank.
     pub q_start: Vec<f64>,
 }
 
+fn unit_scale() -> f64 {
+    1.0
+}
+
 impl ModelKind for TaskSpaceControllerSpec {
     fn build(&self, identifier: &str, _resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
-        Ok(Box::new(TaskSpaceControllerModel::new(identifier, self.model.clone(), self.gains, self.centre, &self.q_start)?))
+        let reference = (self.centre, self.scale);
+        Ok(Box::new(TaskSpaceControllerModel::new(identifier, self.model.clone(), self.gains, reference, &self.q_start)?))
     }
 
     fn equations_html(&self) -> &'static str {
-        "<p>Reference (centre c = (centre_x, centre_y)): \
-<code>x_d(t) = c + (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))</code> [m].</p>\
+        "<p>Reference (centre c = (centre_x, centre_y), scale s = reference_scale): \
+<code>x_d(t) = c + s (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))</code> [m].</p>\
 <p><code>u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J#J) q̇</code>, with J# the Moore–Penrose pseudo-inverse \
 (Jᵀ(JJᵀ)⁻¹ away from singular poses; at a singular pose the direction J has lost gets no acceleration); the last term damps the self-motion of the redundant joints, which the task does not fix.</p>\
 <p><code>τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + tau_comp</code>, Ĥ, Ĉ, ĝ from the controller's own arm model \
@@ -61,6 +69,7 @@ pub struct TaskSpaceControllerModel {
     kd: RealVar,
     null_damping: RealVar,
     centre: [RealVar; 2],
+    scale: RealVar,
     data: TaskSpaceData,
     /// Inputs as read: angles, velocities, compensation; and the torques.
     buf: [Vec<f64>; 4],
@@ -68,9 +77,20 @@ pub struct TaskSpaceControllerModel {
 
 impl TaskSpaceControllerModel {
     /// A controller named `identifier` using `model` (the controller's idea of the arm),
-    /// default gains `gains`, reference centre `centre` [m], and start values `q_start` of the
-    /// angle inputs [rad] (a pose away from singularities, so initial outputs exist).
-    pub fn new(identifier: &str, model: ArmParams, gains: TaskSpaceGains, centre: [f64; 2], q_start: &[f64]) -> Result<Self, BuildError> {
+    /// default gains `gains`, the reference's default centre [m] and scale in `reference`, and
+    /// start values `q_start` of the angle inputs [rad] (a pose away from singularities, so
+    /// initial outputs exist).
+    pub fn new(
+        identifier: &str,
+        model: ArmParams,
+        gains: TaskSpaceGains,
+        reference: ([f64; 2], f64),
+        q_start: &[f64],
+    ) -> Result<Self, BuildError> {
+        let (centre, scale) = reference;
+        if !(scale > 0.0 && scale.is_finite()) {
+            return Err(BuildError::Spec(format!("the reference's scale {scale} must be finite and > 0")));
+        }
         model.validate()?;
         let n = model.dof();
         if n < 2 {
@@ -99,6 +119,7 @@ impl TaskSpaceControllerModel {
             b.parameter("centre_x", METRE, centre[0], "x of the reference's centre"),
             b.parameter("centre_y", METRE, centre[1], "y of the reference's centre"),
         ];
+        let scale = b.parameter("reference_scale", None, scale, "Scale of the reference (1: the paper's size, 0.4 m × 0.3 m across)");
         let text = format!("Task-space computed-torque controller for a {n}-joint planar arm, the paper's reference (neurarm)");
         let description = describe(identifier, text, b.finish())?;
         let data = TaskSpaceData::new(&model);
@@ -115,6 +136,7 @@ impl TaskSpaceControllerModel {
             kd,
             null_damping,
             centre,
+            scale,
             data,
             buf: std::array::from_fn(|_| vec![0.0; n]),
         })
@@ -133,7 +155,7 @@ impl StaticModel for TaskSpaceControllerModel {
         values.read_reals(&self.tau_comp, comp);
         let centre = Vector2::new(values[self.centre[0]], values[self.centre[1]]);
         let gains = TaskSpaceGains { kp: values[self.kp], kd: values[self.kd], null_damping: values[self.null_damping] };
-        let (position, velocity, acceleration) = paper_reference(time, centre);
+        let (position, velocity, acceleration) = scaled_reference(time, centre, values[self.scale]);
         let x = end_effector_position(&self.model, q);
         values[self.reference[0]] = position.x;
         values[self.reference[1]] = position.y;

@@ -105,6 +105,7 @@ fn every_models_step_allocates_nothing() {
             model: arm.clone().frictionless(),
             gains: TaskSpaceGains::default(),
             centre: [0.45, 0.1],
+            scale: 1.0,
             q_start: vec![-0.4, 0.9, 0.7, 0.5],
         }),
         ModelSpec::JointController(JointControllerSpec { joints: 4, kp: 50.0, kd: 2.0, use_sequence: true }),

@@ -118,3 +118,41 @@ fn joint_p_torque_adds_gravity_compensation() {
     let tau = joint_p_torque(&[0.1, 0.2], &[0.3, 0.0], 2.0, &[1.0, -1.0]);
     assert!((tau[0] - 1.4).abs() < 1e-15 && (tau[1] + 1.4).abs() < 1e-15);
 }
+
+/// The placement rule scales the paper's curve with the reach: for the default 1 m arm it is
+/// the paper's size around (0.45, 0.10) m, between 0.23 m and 0.84 m from the base (from the
+/// curve's formula, sampled here); an arm too short, or with a hole in its workspace, is refused.
+#[test]
+fn the_reference_is_placed_by_the_reach_and_checked_against_the_workspace() {
+    let arm = ArmParams::default_four_link();
+    let p = ReferencePlacement::for_arm(&arm);
+    assert_eq!((p.centre, p.scale), (Vector2::new(0.45, 0.10), 1.0));
+    let (near, far) = p.distance_range();
+    let sampled: Vec<f64> = (0..6284).map(|k| scaled_reference(k as f64 * 1e-3, p.centre, 1.0).0.norm()).collect();
+    assert!((near - sampled.iter().cloned().fold(f64::INFINITY, f64::min)).abs() < 1e-12);
+    assert!((0.22..0.23).contains(&near) && (0.83..0.84).contains(&far), "{near} {far}");
+    assert!(p.check(&arm).is_ok());
+    // The same rule for an arm twice as long: twice the size, twice the distances.
+    let mut long = arm.clone();
+    for l in &mut long.links {
+        l.length_m *= 2.0;
+    }
+    let q = ReferencePlacement::for_arm(&long);
+    let (near2, far2) = q.distance_range();
+    assert!((near2 - 2.0 * near).abs() < 1e-12 && (far2 - 2.0 * far).abs() < 1e-12);
+    // Scaled by s about its centre: the paper's curve's velocity scales by s too.
+    let (_, v1, a1) = scaled_reference(0.4, p.centre, 1.0);
+    let (_, v3, a3) = scaled_reference(0.4, p.centre, 3.0);
+    assert!((v3 - 3.0 * v1).norm() < 1e-15 && (a3 - 3.0 * a1).norm() < 1e-15);
+    assert_eq!(scaled_reference(0.4, p.centre, 1.0), paper_reference(0.4, p.centre));
+    // Too far for the arm, and too near for one whose first link outreaches the others.
+    let far_away = ReferencePlacement { centre: Vector2::new(0.9, 0.5), scale: 1.0 };
+    assert!(matches!(far_away.check(&arm), Err(PlacementError::TooFar { reach, .. }) if reach == 1.0));
+    let mut lopsided = arm.clone();
+    lopsided.links.truncate(2);
+    lopsided.friction.truncate(2);
+    lopsided.links[1].length_m = 0.05;
+    let hole = ReferencePlacement::for_arm(&lopsided).check(&lopsided).unwrap_err();
+    assert!(matches!(hole, PlacementError::TooNear { hole, .. } if (hole - 0.2).abs() < 1e-12), "{hole}");
+    assert!(matches!(ReferencePlacement { scale: -1.0, ..p }.check(&arm), Err(PlacementError::Invalid { .. })));
+}
