@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use fmi2_cosim::System;
 use nalgebra::DMatrix;
-use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Settings};
+use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Arms, Settings};
 use neurarm::export::export_fmu;
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
 use neurarm_physics::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
@@ -58,7 +58,9 @@ fn friction_nets() -> Vec<WeightsFile> {
 
 fn loop_step(c: &mut Criterion) {
     let dir = bench_dir();
-    let fmus = build_fmus(&dir).expect("FMUs");
+    let arms = Arms::builtin();
+    let settings = Settings::quick();
+    let fmus = build_fmus(&dir, &arms, &settings).expect("FMUs");
     let nets = friction_nets();
     let mut sources = Vec::new();
     for (j, net) in nets.iter().enumerate() {
@@ -75,8 +77,8 @@ fn loop_step(c: &mut Criterion) {
         enable_gravity: false,
     });
     export_fmu(&FmuSpec { identifier: "NnFrictionCompensator".into(), model }, &sources, &comp).expect("compensator FMU");
-    let settings = Settings::quick();
-    let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &settings).expect("system");
+    let start = tracking_start(&arms.nominal.arm, &arms.placement).expect("start");
+    let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &start, &settings);
     spec.simulation.record.clear();
     std::fs::write(dir.join("system.toml"), spec.to_toml().expect("toml")).expect("system written");
 

@@ -50,11 +50,21 @@ enum Command {
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
-    /// Run the paper's experiments end to end through the master and the FMUs: friction and
-    /// gravity identification, training, Table 1, gravity compensation; writes the FMUs, data,
-    /// nets, plots and report.md to the output folder.
+    /// Run the paper's experiments end to end through the master and the FMUs, for the built-in
+    /// arm or your own of 2 to 8 joints: friction and gravity identification, training, Table 1,
+    /// gravity compensation. Writes the FMUs, data, nets, plots, report.md and results.json
+    /// (every figure, for scripts) to the output folder, which appears only when the run has
+    /// finished.
     Paper {
-        /// Output folder.
+        /// Arm configuration (TOML, see `neurarm default-config`); the built-in 4-joint arm if
+        /// omitted.
+        #[arg(long, short = 'c')]
+        config: Option<PathBuf>,
+        /// The "real" arm: your belief of the real robot (other friction, noise, quantisation),
+        /// same joint count. Without it, the real arm is emulated from the arm (labelled so).
+        #[arg(long)]
+        real: Option<PathBuf>,
+        /// Output folder (absent, empty, or an earlier run's, which is replaced).
         #[arg(long, short = 'o', default_value = "out")]
         output: PathBuf,
         /// A reduced run (3⁴ gravity grid, coarse friction levels, one period of tracking).
@@ -67,6 +77,19 @@ enum Command {
         /// simulations themselves are deterministic.
         #[arg(long)]
         seed: Option<u64>,
+        /// Centre of the task-space reference [m], x,y (default: (0.45 R, 0.10 R), R the reach).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        centre: Option<Vec<f64>>,
+        /// Scale of the reference, 1 = the paper's 0.4 m × 0.3 m (default: the reach in m).
+        #[arg(long)]
+        scale: Option<f64>,
+        /// Task-space gains K_p [1/s²], K_d [1/s] (default 1000,160).
+        #[arg(long, value_delimiter = ',')]
+        tracking_gains: Option<Vec<f64>>,
+        /// Joint-space loop gains K_p [N·m/rad], K_d [N·m·s/rad], taken as given (default: 50,2
+        /// scaled by the arm's gravity load relative to the built-in arm).
+        #[arg(long, value_delimiter = ',')]
+        joint_gains: Option<Vec<f64>>,
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig,
@@ -288,22 +311,54 @@ fn run(cli: Cli) -> Result<()> {
                 Some(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", outcome.rows.len(), output.display()),
             }
         }
-        Command::Paper { output, quick, threads, seed } => {
-            let mut settings = if quick { neurarm::experiments::Settings::quick() } else { neurarm::experiments::Settings::paper() };
+        Command::Paper { config, real, output, quick, threads, seed, centre, scale, tracking_gains, joint_gains } => {
+            use neurarm::experiments::{paper::run_paper, Arms, Settings};
+            let mut settings = if quick { Settings::quick() } else { Settings::paper() };
             if let Some(s) = seed {
                 settings.seed = s;
             }
             if let Some(t) = threads {
                 settings.threads = t.max(1);
             }
-            let r = neurarm::experiments::paper::run_paper(&output, &settings, &mut |line| eprintln!("[paper] {line}"))
-                .map_err(anyhow::Error::msg)?;
-            let t = r.table_1;
+            if let Some(g) = tracking_gains {
+                let (kp, kd) = gain_pair("--tracking-gains", &g)?;
+                settings.tracking_gains.kp = kp;
+                settings.tracking_gains.kd = kd;
+            }
+            if let Some(g) = joint_gains {
+                (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", &g)?;
+                settings.scale_joint_gains = false;
+            }
+            let nominal = load_config(config.clone())?;
+            let real = match real {
+                Some(path) => Some((ArmConfig::from_toml_file(&path)?, path.display().to_string())),
+                None => None,
+            };
+            let placement = match (centre, scale) {
+                (None, None) => None,
+                (centre, scale) => {
+                    let mut p = ReferencePlacement::for_arm(&nominal.arm);
+                    if let Some(c) = centre {
+                        let [x, y] = c[..] else { bail!("--centre takes two numbers, x,y [m]; got {}", c.len()) };
+                        p.centre = nalgebra::Vector2::new(x, y);
+                    }
+                    if let Some(s) = scale {
+                        p.scale = s;
+                    }
+                    Some(p)
+                }
+            };
+            let arm_name = config.map_or("the built-in arm".to_owned(), |c| c.display().to_string());
+            let arms = Arms::new(nominal, real, placement).map_err(|e| anyhow::anyhow!("{arm_name}: {e}"))?;
+            let run = run_paper(&output, &arms, &settings, &mut |line| eprintln!("[paper] {line}"))
+                .map_err(|e| anyhow::anyhow!("{e}\n(no run was written to {})", output.display()))?;
+            let t = &run.results.table_1;
+            let (m, q) = (&t.mse_m2, &t.ratios);
             eprintln!(
                 "Table 1 MSE [m²]: sim perfect {:.3e}, NN {:.3e}, none {:.3e}; real NN {:.3e}, none {:.3e}\nratios: sim NN/perfect {:.3}, none/perfect {:.1}; real NN/none {:.3}",
-                t[0], t[1], t[2], t[3], t[4], t[1] / t[0], t[2] / t[0], t[3] / t[4]
+                m.sim_perfect, m.sim_nn, m.sim_none, m.real_nn, m.real_none, q.sim_nn_over_perfect, q.sim_none_over_perfect, q.real_nn_over_none
             );
-            eprintln!("wrote {}", output.join("report.md").display());
+            eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
         }
         Command::Simulate { torque, arm, output, .. } => {
             let torque = torque.expect("clap requires --torque without a system file");
@@ -434,6 +489,15 @@ fn run(cli: Cli) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Two positive gains from an option's values.
+fn gain_pair(option: &str, values: &[f64]) -> Result<(f64, f64)> {
+    let [kp, kd] = values[..] else { bail!("{option} takes two numbers, kp,kd; got {}", values.len()) };
+    if !(kp.is_finite() && kd.is_finite() && kp > 0.0 && kd >= 0.0) {
+        bail!("{option}: kp must be > 0 and kd >= 0 (got {kp}, {kd})");
+    }
+    Ok((kp, kd))
 }
 
 /// The arm configuration in `path`, or the built-in arm.

@@ -3,23 +3,24 @@
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
 use fmi2_cosim::SystemSpec;
-use neurarm::experiments::{paper::run_paper, Settings};
+use neurarm::experiments::{paper::run_paper, Arms, Settings};
 use neurarm_physics::arm::JointFriction;
 
 #[test]
 fn the_quick_paper_run_reproduces_the_papers_findings() {
     let out = tempfile::tempdir().unwrap();
     let settings = Settings::quick();
-    let r = run_paper(out.path(), &settings, &mut |line| eprintln!("{line}")).unwrap();
-    let t = r.table_1;
+    let run = run_paper(out.path(), &Arms::builtin(), &settings, &mut |line| eprintln!("{line}")).unwrap();
+    let r = &run.results;
+    let t = r.table_1.mse_m2.to_array();
     eprintln!("Table 1: {t:?}; NN/perfect {:.3}, none/perfect {:.1}, real NN/none {:.3}", t[1] / t[0], t[2] / t[0], t[3] / t[4]);
     assert!(t[1] / t[0] <= 1.05, "sim NN/perfect {} (the paper: 1.14)", t[1] / t[0]);
     assert!(t[2] / t[0] >= 5.0, "sim none/perfect {}", t[2] / t[0]);
     assert!(t[3] / t[4] <= 0.3, "real NN/none {} (the paper: 0.24)", t[3] / t[4]);
-    assert_eq!(r.gravity_pairs, 81);
+    assert_eq!(r.gravity.pairs, 81);
     // The sweep's own accuracy: averaged torques against the true gravity at the averaged
     // angles (measured 0.39 N·m; a diagonal PD hold gave 2.7 N·m here).
-    assert!(r.gravity_pair_error < 0.5, "gravity pairs off by up to {} N·m", r.gravity_pair_error);
+    assert!(r.gravity.pair_error_nm < 0.5, "gravity pairs off by up to {} N·m", r.gravity.pair_error_nm);
 
     for f in [
         "report.md",
@@ -89,17 +90,20 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
 /// on 10 000 random configurations stays under 1 % of the largest gravity torque per joint.
 #[test]
 fn the_full_gravity_identification_is_within_one_percent() {
-    use neurarm::experiments::{build_fmus, gravity_grid, gravity_sweep, paper::gravity_net_errors, parallel, train_gravity_net};
+    use neurarm::experiments::{build_fmus, gravity_grid, gravity_net_errors, gravity_sweep, parallel, train_gravity_net};
     let dir = tempfile::tempdir().unwrap();
     let settings = Settings { threads: 2, ..Settings::paper() };
-    let fmus = build_fmus(dir.path()).unwrap();
+    let arms = Arms::builtin();
+    let model = &arms.nominal.arm;
+    let fmus = build_fmus(dir.path(), &arms, &settings).unwrap();
     let grid = gravity_grid(settings.grid, 4);
     let chunks: Vec<Vec<Vec<f64>>> = grid.chunks(grid.len().div_ceil(2)).map(|c| c.to_vec()).collect();
-    let swept = parallel(chunks, 2, |points| gravity_sweep(&fmus.arm, &fmus.joint_controller, &points, &settings), || {}).unwrap();
+    let swept = parallel(chunks, 2, |points| gravity_sweep(&fmus.arm, &fmus.joint_controller, model, &points, &settings), || {}).unwrap();
     let pairs: Vec<_> = swept.into_iter().flat_map(|(p, _)| p).collect();
     assert_eq!(pairs.len(), 2401);
     let net = train_gravity_net(&pairs, &settings, &mut |_| {}).unwrap();
-    let (rms, largest) = gravity_net_errors(&net, &settings).unwrap();
+    let errors = gravity_net_errors(&net, model, settings.grid, &settings).unwrap();
+    let (rms, largest) = (errors.rms_nm, errors.largest_torque_nm);
     let shares: Vec<f64> = rms.iter().map(|e| 100.0 * e / largest).collect();
     eprintln!("gravity net RMS {rms:?} N·m = {shares:.3?} % of {largest:.2} N·m");
     assert!(shares.iter().all(|&s| s < 1.0), "gravity net error {shares:?} % of the largest torque");

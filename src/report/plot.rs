@@ -1,5 +1,6 @@
 //! PNG figures: a grid of panels, each with x–y series drawn as lines, dashed lines or dots,
-//! axis labels and a legend.
+//! and axis labels; one legend for the whole figure, in a band under its title, off the data.
+//! A series' colour follows its name, so a case has the same colour in every panel.
 //!
 //! Text is rasterised by `plotters`' `ab_glyph` backend from a TrueType file read at run time
 //! (DejaVu Sans, Debian package `fonts-dejavu-core`), so no system font service is involved.
@@ -48,7 +49,8 @@ pub struct Panel {
     pub x_label: String,
     /// Vertical axis label, units included (e.g. `"τ [N·m]"`).
     pub y_label: String,
-    /// The curves, drawn in order (later ones on top), each in its own colour.
+    /// The curves, drawn in order (later ones on top); series of the same name share a
+    /// colour across the figure.
     pub series: Vec<Series>,
 }
 
@@ -92,10 +94,12 @@ const PALETTE: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 
-/// Writes a PNG of the panels stacked vertically (or in a grid of `columns`), with a legend per panel.
+/// Writes a PNG of the panels stacked vertically (or in a grid of `columns`), with one legend.
 ///
 /// The figure is 1000 px wide and 320 px tall per row of panels, plus a 44 px band for `title`
-/// when it is not blank. Panels fill the grid row by row; `columns` of 0 counts as 1 and is capped
+/// when it is not blank and a band for the legend: every named series once, in order of first
+/// appearance, its colour and style as in the panels (unnamed series get colours by position
+/// after the named ones and no legend entry). Panels fill the grid row by row; `columns` of 0 counts as 1 and is capped
 /// at the number of panels. Each axis spans its panel's plottable data with a 5 % margin (constant
 /// data gets a band around its value, no data the range 0–1). The file is always PNG, whatever
 /// `path`'s extension, and is written atomically: rendered to a temporary file in the same folder,
@@ -142,10 +146,51 @@ pub fn write_png(path: &Path, title: &str, panels: &[Panel], columns: usize) -> 
     Ok(())
 }
 
+/// One legend entry: a series name, its style and its palette index.
+struct Entry {
+    name: String,
+    style: Style,
+    colour: usize,
+}
+
+/// The legend of `panels`: each named series once, in order of first appearance.
+fn legend_entries(panels: &[Panel]) -> Vec<Entry> {
+    let mut entries: Vec<Entry> = Vec::new();
+    for s in panels.iter().flat_map(|p| &p.series) {
+        if !s.name.is_empty() && !entries.iter().any(|e| e.name == s.name) {
+            entries.push(Entry { name: s.name.clone(), style: s.style, colour: entries.len() });
+        }
+    }
+    entries
+}
+
+/// Pixel width of a legend entry: its mark, its text (≈ 7.5 px per character at 13 px) and a gap.
+fn entry_width(e: &Entry) -> i32 {
+    40 + (e.name.chars().count() as f64 * 7.5) as i32
+}
+
+/// Lines the legend takes when laid out over the figure's width.
+fn legend_lines(entries: &[Entry]) -> usize {
+    let (mut lines, mut x) = (usize::from(!entries.is_empty()), 10);
+    for e in entries {
+        if x + entry_width(e) > WIDTH as i32 - 10 && x > 10 {
+            lines += 1;
+            x = 10;
+        }
+        x += entry_width(e);
+    }
+    lines
+}
+
+/// Height of one legend line, pixels.
+const LEGEND_LINE: u32 = 24;
+
 /// Draws the whole figure into `file` (a `.png` path).
 fn render(file: &Path, title: &str, panels: &[Panel], columns: usize, rows: usize) -> Result<(), String> {
+    let entries = legend_entries(panels);
     let title_height = if title.trim().is_empty() { 0 } else { TITLE_HEIGHT };
-    let height = title_height + ROW_HEIGHT * rows as u32;
+    let legend_height = LEGEND_LINE * legend_lines(&entries) as u32 + if entries.is_empty() { 0 } else { 8 };
+    let height = title_height + legend_height + ROW_HEIGHT * rows as u32;
     let root = BitMapBackend::new(file, (WIDTH, height)).into_drawing_area();
     root.fill(&WHITE).map_err(text)?;
     let body = if title_height > 0 {
@@ -156,15 +201,39 @@ fn render(file: &Path, title: &str, panels: &[Panel], columns: usize, rows: usiz
     } else {
         root.clone()
     };
+    let body = if legend_height > 0 {
+        let (band, rest) = body.split_vertically(legend_height);
+        draw_legend(&band, &entries)?;
+        rest
+    } else {
+        body
+    };
     for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
-        draw_panel(&area, panel).map_err(|e| format!("panel \"{}\": {e}", panel.title))?;
+        draw_panel(&area, panel, &entries).map_err(|e| format!("panel \"{}\": {e}", panel.title))?;
     }
     root.present().map_err(text)?;
     Ok(())
 }
 
-/// Draws one panel (axes, mesh, series, legend) into `area`.
-fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel) -> Result<(), String> {
+/// Draws the legend entries into `band`, flowing over lines.
+fn draw_legend(band: &DrawingArea<BitMapBackend<'_>, Shift>, entries: &[Entry]) -> Result<(), String> {
+    let style = TextStyle::from((FAMILY, 13)).pos(Pos::new(HPos::Left, VPos::Center));
+    let (mut x, mut y) = (10, LEGEND_LINE as i32 / 2 + 2);
+    for e in entries {
+        if x + entry_width(e) > WIDTH as i32 - 10 && x > 10 {
+            x = 10;
+            y += LEGEND_LINE as i32;
+        }
+        let colour = PALETTE[e.colour % PALETTE.len()];
+        band.draw(&legend_mark(e.style, (x, y), colour.stroke_width(2), colour.filled())).map_err(text)?;
+        band.draw_text(&e.name, &style, (x + 28, y)).map_err(text)?;
+        x += entry_width(e);
+    }
+    Ok(())
+}
+
+/// Draws one panel (axes, mesh, series) into `area`; colours from the figure's `legend`.
+fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel, legend: &[Entry]) -> Result<(), String> {
     let runs: Vec<Vec<Vec<(f64, f64)>>> = panel.series.iter().map(|s| plottable_runs(&s.points)).collect();
     let all = || runs.iter().flatten().flatten();
     let (x0, x1) = axis_range(all().map(|p| p.0));
@@ -195,37 +264,21 @@ fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel) -> Re
         .map_err(text)?;
 
     for (i, (series, runs)) in panel.series.iter().zip(&runs).enumerate() {
-        let colour = PALETTE[i % PALETTE.len()];
+        let index = legend.iter().find(|e| !series.name.is_empty() && e.name == series.name).map_or(legend.len() + i, |e| e.colour);
+        let colour = PALETTE[index % PALETTE.len()];
         let line = colour.stroke_width(2);
         let dot = colour.filled();
-        let drawn = match series.style {
+        match series.style {
             Style::Line => chart.draw_series(runs.iter().map(|run| PathElement::new(run.clone(), line))),
             Style::Dashed => chart.draw_series(runs.iter().map(|run| DashedPathElement::new(run.clone(), 8, 5, line))),
             Style::Points => chart.draw_series(runs.iter().flatten().map(|&p| Circle::new(p, 2, dot))),
         }
         .map_err(text)?;
-        if !series.name.is_empty() {
-            let empty = runs.is_empty();
-            let label = if empty { format!("{} (no data)", series.name) } else { series.name.clone() };
-            let style = series.style;
-            drawn.label(label).legend(move |(x, y)| legend_mark(style, (x, y), line, dot));
-        }
         // A run of one point draws no line: mark it so it is not lost.
         if series.style != Style::Points {
             let lone = runs.iter().filter(|run| run.len() == 1).map(|run| Circle::new(run[0], 3, dot));
             chart.draw_series(lone).map_err(text)?;
         }
-    }
-
-    if panel.series.iter().any(|s| !s.name.is_empty()) {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FAMILY, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(170, 170, 170))
-            .draw()
-            .map_err(text)?;
     }
     Ok(())
 }

@@ -1,0 +1,96 @@
+//! Task-space tracking (Table 1): the paper's curve, placed for the arm, tracked by computed
+//! torque with perfect, NN or no friction compensation.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use fmi2_cosim::{SystemSpec, Value};
+use neurarm_physics::arm::{jacobian, ArmParams, ArmState};
+use neurarm_physics::control::{inverse_kinematics, pseudo_inverse, scaled_reference, ReferencePlacement};
+
+use super::{closed_loop, LoopRun, Settings};
+
+/// Pose the inverse kinematics for the tracking start is seeded from [rad]: an elbow-up
+/// pose whose links are far from aligned; joint i of an n-joint arm takes entry i mod 4.
+pub const TRACKING_SEED_POSE: [f64; 4] = [-0.4, 0.9, 0.7, 0.5];
+
+/// The state the tracking runs start from: on the reference placed by `placement` at t = 0,
+/// with its velocity, so no start-up transient enters the error. The pose comes from inverse
+/// kinematics seeded with [`TRACKING_SEED_POSE`]. Fails, saying why, when the arm cannot hold
+/// the curve or the inverse kinematics finds no pose.
+pub fn tracking_start(arm: &ArmParams, placement: &ReferencePlacement) -> Result<ArmState, String> {
+    placement.check(arm).map_err(|e| e.to_string())?;
+    let (x0, xd0, _) = scaled_reference(0.0, placement.centre, placement.scale);
+    let seed: Vec<f64> = (0..arm.dof()).map(|i| TRACKING_SEED_POSE[i % 4]).collect();
+    let q0 = inverse_kinematics(arm, x0, &seed)
+        .ok_or_else(|| format!("no joint angles put the end effector at the reference's start ({:.3}, {:.3}) m", x0.x, x0.y))?;
+    let pinv = pseudo_inverse(&jacobian(arm, &q0)).ok_or("singular start pose")?;
+    let qd0: Vec<f64> = (&pinv * nalgebra::DVector::from_column_slice(xd0.as_slice())).iter().copied().collect();
+    Ok(ArmState { q: q0, qd: qd0 })
+}
+
+/// The task-space tracking loop of Table 1 as a system: the arm in `arm` started at `start`
+/// ([`tracking_start`]), the task-space controller, and the compensator FMU if any, for
+/// `settings.tracking_duration` at `settings.step`. FMU paths are taken as given (relative to
+/// where the system file will be, or absolute).
+pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>, start: &ArmState, settings: &Settings) -> SystemSpec {
+    let n = start.q.len();
+    let mut arm_parameters = BTreeMap::new();
+    for i in 0..n {
+        arm_parameters.insert(format!("q0_{}", i + 1), Value::Real(start.q[i]));
+        arm_parameters.insert(format!("qd0_{}", i + 1), Value::Real(start.qd[i]));
+    }
+    let mut spec = closed_loop(arm, controller, compensator, arm_parameters, BTreeMap::new());
+    let mut record: Vec<String> =
+        ["ctl.error_x", "ctl.error_y", "ctl.x_ref", "ctl.y_ref", "arm.x", "arm.y"].iter().map(|s| s.to_string()).collect();
+    record.extend((1..=n).map(|i| format!("arm.q_{i}")));
+    record.extend((1..=n).map(|i| format!("arm.qd_{i}")));
+    record.extend((1..=n).map(|i| format!("ctl.tau_{i}")));
+    spec.simulation.stop = settings.tracking_duration;
+    spec.simulation.step = settings.step;
+    spec.simulation.record = record;
+    spec
+}
+
+/// Mean squared tracking error of a run [m²] as the controller sees it (from the measured
+/// angles): the mean over samples and both coordinates of (x_d − x)².
+pub fn tracking_mse(run: &LoopRun) -> f64 {
+    tracking_errors(run).measured_mse_m2
+}
+
+/// The tracking errors of one run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct TrackingErrors {
+    /// Mean over samples and both coordinates of (x_d − x)², x from the measured angles
+    /// (the controller's `error_x`, `error_y`) [m²]: Table 1's figure.
+    pub measured_mse_m2: f64,
+    /// The same with x the arm's true end-effector position [m²]; equal to the measured one
+    /// on an arm without sensor effects.
+    pub true_mse_m2: f64,
+    /// RMS of the distance |x_d − x| to the true position [mm]: √(2 · true MSE).
+    pub true_rms_mm: f64,
+    /// Sum over the samples of the squared distance |x_d − x|², measured [m²]: what Table 1
+    /// would show were it a sum instead of a mean.
+    pub measured_sum_m2: f64,
+    /// Samples.
+    pub samples: usize,
+}
+
+/// The errors of a tracking run: against the measured and the true position.
+pub fn tracking_errors(run: &LoopRun) -> TrackingErrors {
+    let col = |name: &str| run.column(name).unwrap_or_default();
+    let (ex, ey) = (col("ctl.error_x"), col("ctl.error_y"));
+    let (xr, yr, x, y) = (col("ctl.x_ref"), col("ctl.y_ref"), col("arm.x"), col("arm.y"));
+    let samples = ex.len();
+    let measured_sum: f64 = ex.iter().zip(&ey).map(|(a, b)| a * a + b * b).sum();
+    let true_sum: f64 = (0..xr.len().min(x.len())).map(|k| (xr[k] - x[k]).powi(2) + (yr[k] - y[k]).powi(2)).sum();
+    let denominator = 2.0 * samples.max(1) as f64;
+    let true_mse = true_sum / denominator;
+    TrackingErrors {
+        measured_mse_m2: measured_sum / denominator,
+        true_mse_m2: true_mse,
+        true_rms_mm: 1e3 * (2.0 * true_mse).sqrt(),
+        measured_sum_m2: measured_sum,
+        samples,
+    }
+}

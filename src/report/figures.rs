@@ -1,0 +1,125 @@
+//! The run's figures: friction pairs, nets and true laws (the paper's Figs. 6/7), tracking
+//! (Figs. 9/10), the gravity net's error over random poses, and the joint-space runs
+//! (Figs. 11/13/14). Each case keeps its colour in every panel (see `plot`).
+
+use std::path::Path;
+
+use super::plot::{write_png, Panel, Series, Style};
+use crate::experiments::paper::PaperRun;
+use crate::experiments::LoopRun;
+
+/// Most points of a scatter series: more only slows the PNG down.
+const MAX_SCATTER: usize = 2000;
+
+/// Writes `friction.png`, `tracking.png`, `gravity.png` and `gravity_compensation.png`.
+pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
+    let n = run.arms.joints();
+    let columns = n.min(4);
+    let top = run.results.settings.max_velocity;
+
+    let mut panels = Vec::new();
+    for (k, tag) in ["simulated", real_label(run)].iter().enumerate() {
+        let arm = if k == 0 { &run.arms.nominal.arm } else { &run.arms.real.arm };
+        for j in 0..n {
+            let net = run.friction_nets[k * n + j].network()?;
+            let speeds: Vec<f64> = (-1000..=1000).map(|i| i as f64 * top / 1000.0).collect();
+            let law = arm.friction[j];
+            panels.push(Panel {
+                title: format!("joint {} ({tag})", j + 1),
+                x_label: "qd [rad/s]".into(),
+                y_label: "τ [N·m]".into(),
+                series: vec![
+                    Series {
+                        name: "identified pairs".into(),
+                        points: run.friction_pairs[k][j].iter().map(|&(v, t, _)| (v, t)).collect(),
+                        style: Style::Points,
+                    },
+                    // The law jumps at 0: break the line there rather than draw a vertical.
+                    Series {
+                        name: "true law".into(),
+                        points: speeds.iter().map(|&v| (v, if v == 0.0 { f64::NAN } else { law.torque(v) })).collect(),
+                        style: Style::Dashed,
+                    },
+                    Series { name: "net".into(), points: speeds.iter().map(|&v| (v, net.evaluate(&[v])[0])).collect(), style: Style::Line },
+                ],
+            });
+        }
+    }
+    write_png(&out.join("friction.png"), "Friction: identified pairs, true law and trained net per joint", &panels, columns)?;
+
+    let loops = &run.loops;
+    let xy = |r: &LoopRun, a: &str, b: &str| -> Vec<(f64, f64)> {
+        r.column(a).unwrap_or_default().into_iter().zip(r.column(b).unwrap_or_default()).collect()
+    };
+    let error_mm = |r: &LoopRun| -> Vec<(f64, f64)> {
+        let c = |name: &str| r.column(name).unwrap_or_default();
+        let (t, xr, yr, x, y) = (c("time"), c("ctl.x_ref"), c("ctl.y_ref"), c("arm.x"), c("arm.y"));
+        (0..t.len().min(x.len())).map(|k| (t[k], 1e3 * (xr[k] - x[k]).hypot(yr[k] - y[k]))).collect()
+    };
+    let real = real_label(run);
+    let names = ["sim, perfect".to_owned(), "sim, NN".into(), "sim, none".into(), format!("{real}, NN"), format!("{real}, none")];
+    let panels = vec![
+        Panel {
+            title: "end-effector path (true positions)".into(),
+            x_label: "x [m]".into(),
+            y_label: "y [m]".into(),
+            series: std::iter::once(Series {
+                name: "reference".into(),
+                points: xy(&loops[0], "ctl.x_ref", "ctl.y_ref"),
+                style: Style::Dashed,
+            })
+            .chain((0..5).map(|k| Series { name: names[k].clone(), points: xy(&loops[k], "arm.x", "arm.y"), style: Style::Line }))
+            .collect(),
+        },
+        Panel {
+            title: "tracking error |x_d − x| (true position)".into(),
+            x_label: "t [s]".into(),
+            y_label: "error [mm]".into(),
+            series: (0..5).map(|k| Series { name: names[k].clone(), points: error_mm(&loops[k]), style: Style::Line }).collect(),
+        },
+    ];
+    write_png(&out.join("tracking.png"), "Task-space tracking with friction compensation (Table 1)", &panels, 1)?;
+
+    let samples = &run.results.gravity.net.samples;
+    let panels: Vec<Panel> = (0..n)
+        .map(|j| {
+            let every = samples[j].len().div_ceil(MAX_SCATTER).max(1);
+            Panel {
+                title: format!("joint {}", j + 1),
+                x_label: "true gravity torque [N·m]".into(),
+                y_label: "net − true [N·m]".into(),
+                series: vec![Series {
+                    name: "random poses".into(),
+                    points: samples[j].iter().step_by(every).copied().collect(),
+                    style: Style::Points,
+                }],
+            }
+        })
+        .collect();
+    let poses = run.results.gravity.net.poses;
+    write_png(&out.join("gravity.png"), &format!("Gravity net error on {poses} random poses (base turned 90°)"), &panels, columns)?;
+
+    let mut panels = Vec::new();
+    for j in 1..=n {
+        let t = loops[5].column("time").unwrap_or_default();
+        let mut series = vec![Series {
+            name: "target".into(),
+            points: t.iter().copied().zip(loops[5].column(&format!("ctl.q_target_{j}")).unwrap_or_default()).collect(),
+            style: Style::Dashed,
+        }];
+        for (k, name) in ["ideal", "NN", "none"].iter().enumerate() {
+            let r = &loops[5 + k];
+            series.push(Series { name: format!("{name} compensation"), points: xy(r, "time", &format!("arm.q_{j}")), style: Style::Line });
+        }
+        panels.push(Panel { title: format!("joint {j}"), x_label: "t [s]".into(), y_label: "q [rad]".into(), series });
+    }
+    write_png(&out.join("gravity_compensation.png"), "Joint-space P control with gravity compensation", &panels, 2)
+}
+
+/// How the report names the real arm: "emulated real" or "real (given)".
+pub fn real_label(run: &PaperRun) -> &'static str {
+    match run.arms.real_origin {
+        crate::experiments::RealOrigin::Emulated => "emulated real",
+        crate::experiments::RealOrigin::Given { .. } => "real (given)",
+    }
+}
