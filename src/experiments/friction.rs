@@ -1,14 +1,13 @@
 //! Friction identification: constant torques on one joint, the others held; the steady
 //! velocities binned into training pairs; one net per joint.
 
-use std::f64::consts::PI;
 use std::path::Path;
 
 use nalgebra::DMatrix;
 
-use super::{joint_loop, master, Settings, IDENTIFICATION_INTERNAL_STEP_S};
+use super::{joint_loop, lightest_inertias, master, Settings, IDENTIFICATION_INTERNAL_STEP_S};
 use fmi2_cosim::{Algorithm, Value};
-use neurarm_physics::arm::{mass_matrix, ArmParams, JointFriction};
+use neurarm_physics::arm::{ArmParams, JointFriction};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
 
 /// A training pair of a friction net: (velocity [rad/s], mean torque [N·m], samples averaged).
@@ -45,24 +44,13 @@ pub fn rest_pair(runs: &[&FrictionRun]) -> Option<(f64, f64, usize)> {
 }
 
 /// Gains of the joint PD loops of the identification experiments: critically damped at
-/// 40 rad/s for the smallest inertia each joint can present, 1/(H⁻¹)_ii over poses on a grid
-/// (the other joints' coupling makes it much smaller than H_ii), so the sampled loop stays
-/// stable in every pose.
+/// 40 rad/s for the smallest inertia each joint can present ([`lightest_inertias`]), so the
+/// sampled loop stays stable in every pose.
 pub fn hold_gains(arm: &ArmParams) -> Vec<(f64, f64)> {
-    let n = arm.dof();
-    let mut inertia = vec![f64::INFINITY; n];
-    for k in 0..4usize.pow(n as u32 - 1) {
-        let q: Vec<f64> = (0..n).map(|i| if i == 0 { 0.0 } else { ((k / 4usize.pow(i as u32 - 1)) % 4) as f64 * PI / 2.0 }).collect();
-        if let Some(inv) = mass_matrix(arm, &q).try_inverse() {
-            for i in 0..n {
-                inertia[i] = inertia[i].min(1.0 / inv[(i, i)]);
-            }
-        }
-    }
     // Stiffer or more damped settings (150 rad/s, or damping ratio 3) made the coupled sampled
     // loop unstable in some poses of the gravity sweep.
     let (w, zeta) = (40.0, 1.0);
-    inertia.iter().map(|m| (m * w * w, 2.0 * zeta * m * w)).collect()
+    lightest_inertias(arm).iter().map(|m| (m * w * w, 2.0 * zeta * m * w)).collect()
 }
 
 /// Drives joint `joint` of the arm in `arm_fmu` with constant torques in `direction` (±1),

@@ -11,24 +11,23 @@ use super::{closed_loop, LoopRun, Settings};
 
 /// The joint-space loop as a system: the `joints`-joint arm with its base turned 90° starting
 /// at the hanging pose, the joint controller on its built-in sequence (joint i follows column
-/// i mod 4 of `JOINT_SEQUENCE`) with gains `kp` [N·m/rad], `kd` [N·m·s/rad] on every joint,
-/// and the compensator FMU if any.
+/// i mod 4 of `JOINT_SEQUENCE`) with gains (K_p [N·m/rad], K_d [N·m·s/rad]) per joint in
+/// `gains`, and the compensator FMU if any.
 pub fn gravity_compensation_system(
     arm: &Path,
     controller: &Path,
     compensator: Option<&Path>,
-    joints: usize,
-    (kp, kd): (f64, f64),
+    gains: &[(f64, f64)],
     settings: &Settings,
 ) -> SystemSpec {
-    let n = joints;
+    let n = gains.len();
     let arm_parameters = BTreeMap::from([("base_angle".to_owned(), Value::Real(PI / 2.0)), ("q0_1".to_owned(), Value::Real(-PI / 2.0))]);
-    let mut gains = BTreeMap::new();
-    for i in 1..=n {
-        gains.insert(format!("kp_{i}"), Value::Real(kp));
-        gains.insert(format!("kd_{i}"), Value::Real(kd));
+    let mut parameters = BTreeMap::new();
+    for (i, (kp, kd)) in gains.iter().enumerate() {
+        parameters.insert(format!("kp_{}", i + 1), Value::Real(*kp));
+        parameters.insert(format!("kd_{}", i + 1), Value::Real(*kd));
     }
-    let mut spec = closed_loop(arm, controller, compensator, arm_parameters, gains);
+    let mut spec = closed_loop(arm, controller, compensator, arm_parameters, parameters);
     let mut record: Vec<String> = (1..=n).map(|i| format!("ctl.q_target_{i}")).collect();
     record.extend((1..=n).map(|i| format!("arm.q_{i}")));
     record.extend((1..=n).map(|i| format!("ctl.tau_{i}")));

@@ -23,7 +23,7 @@ use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, MasterError, SimulationSpe
 use neurarm_models::{
     FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
 };
-use neurarm_physics::arm::{gravity_torques, ArmParams, ArmState, FrictionBranch};
+use neurarm_physics::arm::{gravity_torques, mass_matrix, ArmParams, ArmState, FrictionBranch};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
 
@@ -254,13 +254,51 @@ pub fn gravity_scale(arm: &ArmParams) -> f64 {
     load(arm) / load(&ArmParams::default_four_link())
 }
 
-/// Gains (K_p [N·m/rad], K_d [N·m·s/rad]) of the joint-space gravity-compensation loop on
-/// `arm`: `settings.joint_kp`, `joint_kd` times [`gravity_scale`] when
-/// `settings.scale_joint_gains`, so the error gravity leaves uncompensated, and the share the
-/// gains correct, are alike for a light arm and a heavy one. Taken as given otherwise.
-pub fn joint_loop_gains(arm: &ArmParams, settings: &Settings) -> (f64, f64) {
-    let s = if settings.scale_joint_gains { gravity_scale(arm) } else { 1.0 };
-    (settings.joint_kp * s, settings.joint_kd * s)
+/// The smallest inertia each joint can present [kg·m²]: 1/(H⁻¹)_ii, the inertia a joint
+/// feels when the others move freely (the coupling makes it much smaller than H_ii), least
+/// over the poses of a 4ⁿ⁻¹ grid (joint 1 does not change H).
+pub fn lightest_inertias(arm: &ArmParams) -> Vec<f64> {
+    let n = arm.dof();
+    let mut inertia = vec![f64::INFINITY; n];
+    for k in 0..4usize.pow(n as u32 - 1) {
+        let q: Vec<f64> = (0..n).map(|i| if i == 0 { 0.0 } else { ((k / 4usize.pow(i as u32 - 1)) % 4) as f64 * PI / 2.0 }).collect();
+        if let Some(inv) = mass_matrix(arm, &q).try_inverse() {
+            for i in 0..n {
+                inertia[i] = inertia[i].min(1.0 / inv[(i, i)]);
+            }
+        }
+    }
+    inertia
+}
+
+/// Fastest natural frequency a joint of the scaled joint-space loop gets, √(K_p/m) [rad/s]:
+/// just above the built-in arm's fastest joint (121 rad/s, joint 4).
+pub const JOINT_LOOP_MAX_RAD_S: f64 = 125.0;
+/// Largest K_d·h/m of a joint of the scaled joint-space loop (h the communication step): just
+/// above the built-in arm's (0.59, joint 4). Near 1 the sampled derivative term rings.
+pub const JOINT_LOOP_MAX_DAMPING_STEP: f64 = 0.6;
+
+/// Gains (K_p [N·m/rad], K_d [N·m·s/rad]) per joint of the joint-space gravity-compensation
+/// loop on `arm`. With `settings.scale_joint_gains`: `settings.joint_kp`, `joint_kd` times
+/// [`gravity_scale`], so the error gravity leaves uncompensated, and the share the gains
+/// correct, are alike for a light arm and a heavy one; then capped per joint so that no joint
+/// is faster than the built-in arm's fastest, √(K_p/m) ≤ [`JOINT_LOOP_MAX_RAD_S`] and
+/// K_d h/m ≤ [`JOINT_LOOP_MAX_DAMPING_STEP`] with m the joint's [`lightest_inertias`] (the
+/// caps do not bind on the built-in arm, whose gains are 50 and 2 on every joint). Without
+/// scaling the gains are taken as given on every joint.
+pub fn joint_loop_gains(arm: &ArmParams, settings: &Settings) -> Vec<(f64, f64)> {
+    if !settings.scale_joint_gains {
+        return vec![(settings.joint_kp, settings.joint_kd); arm.dof()];
+    }
+    let s = gravity_scale(arm);
+    lightest_inertias(arm)
+        .iter()
+        .map(|m| {
+            let kp = (settings.joint_kp * s).min(JOINT_LOOP_MAX_RAD_S * JOINT_LOOP_MAX_RAD_S * m);
+            let kd = (settings.joint_kd * s).min(JOINT_LOOP_MAX_DAMPING_STEP * m / settings.step);
+            (kp, kd)
+        })
+        .collect()
 }
 
 /// The FMUs every experiment is built from. Compensators are exported with the switches each
@@ -294,7 +332,7 @@ pub fn build_fmus(dir: &Path, arms: &Arms, settings: &Settings) -> Result<Fmus, 
         Ok(path)
     };
     let ArmState { q: q_start, .. } = tracking_start(&nominal.arm, &arms.placement)?;
-    let (kp, kd) = joint_loop_gains(&nominal.arm, settings);
+    let (kp, kd) = joint_loop_gains(&nominal.arm, settings)[0];
     Ok(Fmus {
         arm: export("PlanarArm", ModelSpec::PlanarArm(PlanarArmSpec { config: nominal.clone(), q0: vec![0.0; n], qd0: vec![0.0; n] }))?,
         arm_real: export(

@@ -144,10 +144,10 @@ pub struct GravityResults {
 /// The joint-space loop with gravity compensation.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct JointLoopResults {
-    /// Position gain used [N·m/rad].
-    pub kp: f64,
-    /// Velocity gain used [N·m·s/rad].
-    pub kd: f64,
+    /// Position gain per joint [N·m/rad].
+    pub kp: Vec<f64>,
+    /// Velocity gain per joint [N·m·s/rad].
+    pub kd: Vec<f64>,
     /// RMS of q_target − q per joint [rad]: ideal, NN, none.
     pub rms_rad: [Vec<f64>; 3],
     /// Settled error per joint [rad] (see [`joint_settled_errors`]): ideal, NN, none.
@@ -423,7 +423,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     let start = tracking_start(model, &arms.placement)?;
     let tracking = |arm: &Path, comp: Option<PathBuf>| tracking_system(arm, &task, comp.as_deref(), &start, settings);
     let joint_gains = joint_loop_gains(model, settings);
-    let joint_space = |comp: Option<PathBuf>| gravity_compensation_system(&arm, &joint, comp.as_deref(), n, joint_gains, settings);
+    let joint_space = |comp: Option<PathBuf>| gravity_compensation_system(&arm, &joint, comp.as_deref(), &joint_gains, settings);
     let specs: Vec<SystemSpec> = vec![
         tracking(&arm, Some(rel(&fmus.ideal_friction))),
         tracking(&arm, Some(rel(&nn_friction))),
@@ -473,8 +473,8 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         paper_over_ours: log_ratio.exp(),
     };
     let joint_loop = JointLoopResults {
-        kp: joint_gains.0,
-        kd: joint_gains.1,
+        kp: joint_gains.iter().map(|g| g.0).collect(),
+        kd: joint_gains.iter().map(|g| g.1).collect(),
         rms_rad: [0, 1, 2].map(|k| joint_rms_errors(&loops[5 + k], n)),
         settled_rad: [0, 1, 2].map(|k| joint_settled_errors(&loops[5 + k], n)),
     };

@@ -18,6 +18,10 @@ fn header(first: &str, n: usize) -> String {
     s
 }
 
+fn list(values: &[f64]) -> String {
+    values.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", ")
+}
+
 fn cases(c: &Cases, f: impl Fn(f64) -> String) -> String {
     c.to_array().iter().map(|&v| f(v)).collect::<Vec<_>>().join(" | ")
 }
@@ -112,16 +116,17 @@ pub fn report_markdown(run: &PaperRun) -> String {
     let _ = writeln!(
         s,
         "Gains: task space K_p = {} 1/s², K_d = {} 1/s, null-space damping {} 1/s (acceleration level: the same for any arm). \
-         Joint-space loop K_p = {:.4} N·m/rad, K_d = {:.4} N·m·s/rad{}. The identification holds the other joints with an inertia-scaled PD \
+         Joint-space loop K_p = {} N·m/rad, K_d = {} N·m·s/rad per joint{}. The identification holds the other joints with an inertia-scaled PD \
          (critically damped at 40 rad/s for the lightest pose each joint presents).\n",
         settings.tracking_gains.kp,
         settings.tracking_gains.kd,
         settings.tracking_gains.null_damping,
-        r.joint_loop.kp,
-        r.joint_loop.kd,
+        list(&r.joint_loop.kp),
+        list(&r.joint_loop.kd),
         if settings.scale_joint_gains {
             format!(
-                " ({} and {} for the built-in arm, times the arm's gravity load relative to it, {:.4})",
+                " ({} and {} for the built-in arm, times the arm's gravity load relative to it, {:.4}, capped so no joint is faster \
+                 than the built-in arm's fastest; see `joint_loop_gains`)",
                 settings.joint_kp, settings.joint_kd, setup.gravity_scale
             )
         } else {
@@ -260,9 +265,10 @@ pub fn report_markdown(run: &PaperRun) -> String {
     let _ = writeln!(s, "\n## Gravity compensation in the joint-space loop\n");
     let _ = writeln!(
         s,
-        "τ = τ_comp + K_p (q_d − q) + K_d (q̇_d − q̇), K_p = {:.4} N·m/rad, K_d = {:.4} N·m·s/rad; the built-in target sequence (5 × 3 s; \
-         joint i follows column i mod 4). RMS of q_d − q [rad]:\n",
-        j.kp, j.kd
+        "τ = τ_comp + K_p (q_d − q) + K_d (q̇_d − q̇), K_p = {} N·m/rad, K_d = {} N·m·s/rad per joint; the built-in target sequence \
+         (5 × 3 s; joint i follows column i mod 4). RMS of q_d − q [rad]:\n",
+        list(&j.kp),
+        list(&j.kd)
     );
     let _ = writeln!(s, "{}", header("compensation", n));
     for (name, e) in ["ideal", "NN", "none"].iter().zip(&j.rms_rad) {
