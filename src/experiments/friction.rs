@@ -6,9 +6,27 @@ use std::path::Path;
 use nalgebra::DMatrix;
 
 use super::{joint_loop, lightest_inertias, master, Settings, IDENTIFICATION_INTERNAL_STEP_S};
-use fmi2_cosim::{Algorithm, Value};
-use neurarm_physics::arm::{ArmParams, JointFriction};
+use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_physics::arm::{coriolis_centrifugal_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
+
+/// How the friction runs hold the joints that are not driven.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionHold {
+    /// The joint controller's PD, inertia-scaled ([`hold_gains`]): the coupling torques of
+    /// the driven joint bend the held ones at speed, and the pairs with them.
+    Pd,
+    /// Computed torque from the nominal rigid-body model without gravity, τ_h = S u_h + c_h for
+    /// the held joints h: u_h = −K_d q̇_h − K_p q_h (K_p = 1600 1/s², K_d = 80 1/s, critically
+    /// damped at 40 rad/s), c the Coriolis and centrifugal torques, and S = H_hh − H_hf H_fh / H_ff
+    /// the held joints' inertia while the driven joint f moves freely. Then S q̈_h = S u_h −
+    /// H_hf q̈_f: the held joints settle exactly once the driven one runs at constant speed, in
+    /// every pose, so the coupling no longer bends the measurement. (With H_hh in place of S,
+    /// i.e. assuming q̈_f = 0 in the control law, the loop's real gain was up to 50 × the
+    /// designed one and sensor noise made it diverge.)
+    Rigid,
+}
 
 /// A training pair of a friction net: (velocity [rad/s], mean torque [N·m], samples averaged).
 pub type FrictionPair = (f64, f64, usize);
@@ -21,6 +39,8 @@ pub struct FrictionRun {
     pub joint: usize,
     /// (torque, mean velocity) per torque level that moved the joint.
     pub levels: Vec<(f64, f64)>,
+    /// Speed-controlled levels below the first moving one (rigid hold only).
+    pub speed_levels: usize,
     /// (velocity sample, torque) of the steady windows: the binned data.
     pub samples: Vec<(f64, f64)>,
     /// Simulated time [s].
@@ -53,9 +73,52 @@ pub fn hold_gains(arm: &ArmParams) -> Vec<(f64, f64)> {
     lightest_inertias(arm).iter().map(|m| (m * w * w, 2.0 * zeta * m * w)).collect()
 }
 
+/// What drives the driven joint for a step.
+#[derive(Clone, Copy)]
+enum Drive {
+    /// A constant torque [N·m].
+    Torque(f64),
+    /// Computed torque tracking speed `wanted` [rad/s] with `bandwidth` [rad/s], plus
+    /// `feedforward` [N·m].
+    Speed { wanted: f64, feedforward: f64, bandwidth: f64 },
+}
+
+/// Bandwidths of the speed loop of the low-speed levels, tried in turn until the level holds
+/// its speed [rad/s] (see [`friction_run`]); at 1 ms steps the last is K h / H_ff = 0.64.
+const SPEED_LOOP_RAD_S: [f64; 3] = [40.0, 160.0, 640.0];
+/// Time a low-speed level settles before it is averaged [s].
+const SPEED_LEVEL_SETTLE_S: f64 = 0.5;
+/// Time a low-speed level is averaged over [s].
+const SPEED_LEVEL_AVERAGE_S: f64 = 1.0;
+
+/// Smallest change between successive 0.1 s means of the speed that ends a constant-torque
+/// level [rad/s]: the fitted acceleration corrects what is left of the approach, so the level
+/// need not wait for the last digit (2e-4 took 10 × longer on a heavy joint, T = H/b ≈ 3 s).
+const STEADY_FLOOR_RAD_S: f64 = 2e-3;
+
+/// Windows of 0.1 s over which the driven joint's acceleration is fitted at the end of a level.
+const ACCELERATION_WINDOWS: usize = 5;
+
+/// Least-squares slope of `samples` taken every `step` seconds [unit of the samples per s].
+fn slope_per_second(samples: &std::collections::VecDeque<f64>, step: f64) -> f64 {
+    let n = samples.len();
+    if n < 2 {
+        return 0.0;
+    }
+    let centre = (n as f64 - 1.0) / 2.0;
+    let mean = samples.iter().sum::<f64>() / n as f64;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (k, v) in samples.iter().enumerate() {
+        let dx = k as f64 - centre;
+        sxy += dx * (v - mean);
+        sxx += dx * dx;
+    }
+    sxy / sxx / step
+}
+
 /// Drives joint `joint` of the arm in `arm_fmu` with constant torques in `direction` (±1),
-/// the others held at 0 by the joint controller (gains [`hold_gains`] of the nominal `model`), raising the torque level by level until
-/// the steady speed passes `settings.max_velocity`. Each level lasts until the measured
+/// the others held at 0 (see [`FrictionHold`]), raising the torque level by level until the
+/// steady speed passes `settings.max_velocity`. Each level lasts until the measured
 /// velocity's 0.1 s means change by less than the noise allows (at most 20 s). The step
 /// between levels aims at `velocity_spacing` from the local slope of the levels so far.
 pub fn friction_run(
@@ -66,35 +129,100 @@ pub fn friction_run(
     direction: f64,
     settings: &Settings,
 ) -> Result<FrictionRun, String> {
-    let mut gains = hold_gains(model);
+    let n = model.dof();
+    let rigid = settings.friction_hold == FrictionHold::Rigid;
+    let mut gains = if rigid { vec![(0.0, 0.0); n] } else { hold_gains(model) };
     gains[joint] = (0.0, 0.0);
     // Friction is identified with the arm horizontal, whatever its configured base angle.
     let parameters = [("internal_step", Value::Real(IDENTIFICATION_INTERNAL_STEP_S)), ("base_angle", Value::Real(0.0))];
     let mut s = joint_loop(arm_fmu, controller, &parameters, &gains, None)?;
     s.set("ctl", "use_sequence", Value::Boolean(false)).map_err(master)?;
     let mut sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[]).map_err(master)?;
-    let drive = [sim.real_handle(&format!("ctl.tau_comp_{}", joint + 1)).map_err(master)?];
-    let speed = [sim.real_handle(&format!("arm.qd_meas_{}", joint + 1)).map_err(master)?];
+    let handles = |sim: &Simulation, f: &dyn Fn(usize) -> String| -> Result<Vec<Handle>, String> {
+        (0..n).map(|i| sim.real_handle(&f(i)).map_err(master)).collect()
+    };
+    let torque_inputs = handles(&sim, &|i| format!("ctl.tau_comp_{}", i + 1))?;
+    let state = [handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?, handles(&sim, &|i| format!("arm.qd_meas_{}", i + 1))?].concat();
+    let speed_index = n + joint;
+    // The rigid hold (see [`FrictionHold::Rigid`]).
+    let rigid_body = model.clone().with_base_angle(0.0).frictionless();
+    let mut data = ArmData::new(&rigid_body);
+    let (mut h, mut c, mut u, mut x, mut commanded) =
+        (nalgebra::DMatrix::zeros(n, n), vec![0.0; n], vec![0.0; n], vec![0.0; 2 * n], vec![0.0; n]);
+    let mut driven_speed = vec![0.0; n];
+    const HOLD_RAD_S: f64 = 20.0;
+    // One step with the driven joint under `drive`; returns its measured speed after the step
+    // and the torque it got.
+    let mut step = |sim: &mut Simulation, drive: Drive| -> Result<(f64, f64), String> {
+        sim.get_reals(&state, &mut x).map_err(master)?;
+        if rigid {
+            let (q, qd) = x.split_at(n);
+            mass_matrix_into(&rigid_body, &mut data, q, &mut h);
+            // The held joints are at rest but for noise: their measured speeds would only put
+            // that noise into the Coriolis terms (× the driven joint's speed).
+            for i in 0..n {
+                driven_speed[i] = if i == joint { qd[i] } else { 0.0 };
+            }
+            coriolis_centrifugal_into(&rigid_body, &mut data, q, &driven_speed, &mut c);
+            for i in 0..n {
+                u[i] = -2.0 * HOLD_RAD_S * qd[i] - HOLD_RAD_S * HOLD_RAD_S * q[i];
+            }
+            match drive {
+                Drive::Torque(_) => {
+                    // τ_h = S u_h + c_h with S = H_hh − H_hf H_fh / H_ff, the held joints'
+                    // inertia while the driven joint f moves freely.
+                    u[joint] = 0.0;
+                    let coupling: f64 = (0..n).map(|k| h[(joint, k)] * u[k]).sum::<f64>() / h[(joint, joint)];
+                    for i in 0..n {
+                        commanded[i] = (0..n).map(|k| h[(i, k)] * u[k]).sum::<f64>() - h[(i, joint)] * coupling + c[i];
+                    }
+                }
+                Drive::Speed { wanted, feedforward, bandwidth } => {
+                    // Computed torque on every joint, the driven one tracking a speed.
+                    u[joint] = bandwidth * (wanted - qd[joint]);
+                    for i in 0..n {
+                        commanded[i] = (0..n).map(|k| h[(i, k)] * u[k]).sum::<f64>() + c[i];
+                    }
+                    commanded[joint] += feedforward;
+                }
+            }
+        } else {
+            commanded.fill(0.0);
+        }
+        if let Drive::Torque(tau) = drive {
+            commanded[joint] = tau;
+        }
+        let torque = commanded[joint];
+        sim.set_reals(&torque_inputs, &commanded).map_err(master)?;
+        sim.step().map_err(master)?;
+        sim.get_reals(&state, &mut x).map_err(master)?;
+        Ok((x[speed_index], torque))
+    };
     let window = (0.1 / settings.step).round() as usize;
+    // The driven joint's inertia with the others held rigidly: H_ff, which the held joints'
+    // angles (all 0) fix and the driven joint's own angle does not change.
+    let inertia = neurarm_physics::arm::mass_matrix(&rigid_body, &vec![0.0; n])[(joint, joint)];
     let mut run = FrictionRun { joint, ..Default::default() };
     let mut tau = 0.0;
-    let mut increment = 0.02;
+    let mut increment: f64 = 0.02;
     let mut buf = vec![0.0; window];
-    let mut v = [0.0];
+    let mut history: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
     loop {
         tau += direction * increment;
-        sim.set_reals(&drive, &[tau]).map_err(master)?;
         let mut previous = f64::NAN;
         let started = sim.time();
+        history.clear();
         let mean = loop {
             for slot in buf.iter_mut() {
-                sim.step().map_err(master)?;
-                sim.get_reals(&speed, &mut v).map_err(master)?;
-                *slot = v[0];
+                *slot = step(&mut sim, Drive::Torque(tau))?.0;
+            }
+            history.extend(buf.iter().copied());
+            while history.len() > ACCELERATION_WINDOWS * window {
+                history.pop_front();
             }
             let mean = buf.iter().sum::<f64>() / window as f64;
             let spread = (buf.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / window as f64).sqrt();
-            let tolerance = 2e-4 + 3.0 * spread / (window as f64).sqrt();
+            let tolerance = STEADY_FLOOR_RAD_S + 3.0 * spread / (window as f64).sqrt();
             if (mean - previous).abs() < tolerance || sim.time() - started > 20.0 {
                 break mean;
             }
@@ -105,11 +233,17 @@ pub fn friction_run(
             if let Some(&(t0, v0)) = run.levels.last() {
                 let slope = (tau - t0) / (mean - v0);
                 if slope.is_finite() && slope > 0.0 {
-                    increment = (slope * settings.velocity_spacing).clamp(1e-3, 0.5);
+                    // At most doubling: one level whose speed barely moved (noise, the Stribeck
+                    // dip) would otherwise make the next step jump by a whole rad/s.
+                    increment = (slope * settings.velocity_spacing).clamp(1e-3, (2.0 * increment).min(0.5));
                 }
             }
             run.levels.push((tau, mean));
-            run.samples.extend(buf.iter().map(|&x| (x, tau)));
+            // What is left of the approach to the steady state: friction = τ − H_ff q̈_f, with q̈_f
+            // the slope of the level's last samples (up to 0.5 s). Only the rigid hold keeps
+            // the driven joint's inertia at H_ff.
+            let friction = if rigid { tau - inertia * slope_per_second(&history, settings.step) } else { tau };
+            run.samples.extend(buf.iter().map(|&x| (x, friction)));
         } else if run.levels.is_empty() {
             run.breakaway = (tau, run.breakaway.1 + 1);
         }
@@ -118,6 +252,61 @@ pub fn friction_run(
         }
         if tau.abs() > 100.0 {
             return Err(format!("joint {}: no speed of {} rad/s below 100 N·m", joint + 1, settings.max_velocity));
+        }
+    }
+    // Below the first moving level's speed constant torques cannot hold the joint: where
+    // friction falls with speed (Stribeck) the steady state is unstable, so the first level
+    // that moves jumps to where friction rises again (0.3–0.7 rad/s on a Stribeck joint) and
+    // leaves a gap the net would bridge blindly. The rigid hold fills it with speed-controlled
+    // levels: computed torque on every joint from the rigid-body model, the driven joint's
+    // acceleration u_f = ω (q̇_d − q̇_f) plus the first moving level's torque τ_1 as feedforward,
+    // so its torque is τ_1 + H_ff u_f + (coupling), a P loop of gain ω H_ff on its speed; each
+    // level settles for 0.5 s and is then averaged over 1 s. A steady state of any P loop is a
+    // point of the friction curve, so the pair is the level's mean speed and mean torque. The
+    // loop holds a speed only where its gain beats the fall of friction with speed, so ω starts
+    // at 40 rad/s and is raised (160, 640) until the level stays within half its target; a
+    // stiffer loop first would put its gain × the speed noise into the torque of every level.
+    // (With constant-torque holds instead of computed torque on all joints, the speed loop and
+    // the holds fought and diverged.)
+    if let (true, Some(&(tau_first, v_first))) = (rigid, run.levels.first()) {
+        let lowest = settings.bin_width.min(0.05);
+        let mut target = v_first.abs() - settings.velocity_spacing;
+        let settle = (SPEED_LEVEL_SETTLE_S / settings.step).round() as usize;
+        let average = (SPEED_LEVEL_AVERAGE_S / settings.step).round() as usize;
+        let (mut speeds, mut torques) = (Vec::with_capacity(average), Vec::with_capacity(average));
+        // Down from the first moving level by the spacing, then the two lowest speeds.
+        let mut targets = Vec::new();
+        while target >= lowest {
+            targets.push(target);
+            target -= settings.velocity_spacing;
+        }
+        for low in [2.0 * lowest, lowest] {
+            if targets.last().is_some_and(|&t| t - low > 0.5 * lowest) {
+                targets.push(low);
+            }
+        }
+        for target in targets {
+            let wanted = direction * target;
+            for bandwidth in SPEED_LOOP_RAD_S {
+                speeds.clear();
+                torques.clear();
+                for k in 0..settle + average {
+                    let (speed, torque) = step(&mut sim, Drive::Speed { wanted, feedforward: tau_first, bandwidth })?;
+                    if k >= settle {
+                        speeds.push(speed);
+                        torques.push(torque);
+                    }
+                }
+                let mean = speeds.iter().sum::<f64>() / speeds.len() as f64;
+                if (mean - wanted).abs() < 0.5 * target {
+                    let history: std::collections::VecDeque<f64> = speeds.iter().copied().collect();
+                    let torque = torques.iter().sum::<f64>() / torques.len() as f64;
+                    let friction = torque - inertia * slope_per_second(&history, settings.step);
+                    run.samples.extend(speeds.iter().map(|_| (mean, friction)));
+                    run.speed_levels += 1;
+                    break;
+                }
+            }
         }
     }
     run.simulated_s = sim.time();
@@ -147,13 +336,15 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
     let t = DMatrix::from_fn(1, pairs.len(), |_, c| pairs[c].1);
     // A few hundred pairs with a jump at zero: 6 validation failures in a row stop most
     // starts in the first epochs, so this allows 20. Of 10 starts, each stopped early on its own
-    // validation part, the one that fits all pairs best is kept: scoring on the validation
-    // part alone picks nets whose jump is anywhere, as it rarely holds a pair near q̇ = 0.
+    // validation part, the one closest to the pairs' piecewise-linear interpolant on a dense
+    // grid is kept ([`interpolant_rms`]): scoring on the validation part alone picks nets whose
+    // jump is anywhere, as it rarely holds a pair near q̇ = 0, and scoring at the pairs alone
+    // let a net overshoot between the pair at rest and the first moving one.
     const STARTS: u64 = 10;
     let mut best: Option<(f64, TrainSettings, neurarm_physics::nn::Trained)> = None;
     for start in 0..STARTS {
         let mut settings =
-            TrainSettings { hidden: 10, restarts: 1, max_fail: 20, seed: seed + joint as u64 + 7919 * start, ..TrainSettings::default() };
+            TrainSettings { hidden: 15, restarts: 1, max_fail: 20, seed: seed + joint as u64 + 7919 * start, ..TrainSettings::default() };
         // The pair at rest is the only one in the stick band: keep it in the training part
         // (the first split seed from there that does), or the jump lands anywhere in the band.
         if let Some(rest) = pairs.iter().position(|p| p.0 == 0.0) {
@@ -165,9 +356,10 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
             }
         }
         let trained = train(&x, &t, &settings, &mut |_| {}).map_err(|e| format!("friction net of joint {}: {e}", joint + 1))?;
-        let sse: f64 = pairs.iter().map(|p| (trained.net.evaluate(&[p.0])[0] - p.1).powi(2)).sum();
-        if best.as_ref().is_none_or(|b| sse < b.0) {
-            best = Some((sse, settings, trained));
+        let at_pairs = (pairs.iter().map(|p| (trained.net.evaluate(&[p.0])[0] - p.1).powi(2)).sum::<f64>() / pairs.len() as f64).sqrt();
+        let score = at_pairs + interpolant_rms(&trained.net, pairs);
+        if best.as_ref().is_none_or(|b| score < b.0) {
+            best = Some((score, settings, trained));
         }
     }
     let (_, settings, trained) = best.expect("at least one start");
@@ -179,6 +371,25 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
         settings,
         trained.report,
     ))
+}
+
+/// RMS over a 1 mrad/s grid spanning the pairs of net(q̇) − the pairs' piecewise-linear
+/// interpolant [N·m]: how a net behaves between the pairs, the stick band included.
+pub fn interpolant_rms(net: &neurarm_physics::nn::Mlp, pairs: &[FrictionPair]) -> f64 {
+    let (Some(first), Some(last)) = (pairs.first(), pairs.last()) else { return f64::INFINITY };
+    let steps = ((last.0 - first.0) / 1e-3).floor() as usize;
+    let (mut sq, mut k) = (0.0, 0usize);
+    for i in 0..=steps {
+        let v = first.0 + i as f64 * 1e-3;
+        while k + 2 < pairs.len() && pairs[k + 1].0 < v {
+            k += 1;
+        }
+        let (a, b) = (pairs[k], pairs[(k + 1).min(pairs.len() - 1)]);
+        let w = if b.0 > a.0 { ((v - a.0) / (b.0 - a.0)).clamp(0.0, 1.0) } else { 0.0 };
+        let interpolated = a.1 + w * (b.1 - a.1);
+        sq += (net.evaluate(&[v])[0] - interpolated).powi(2);
+    }
+    (sq / (steps + 1) as f64).sqrt()
 }
 
 /// How well a friction net matches a known friction law over |q̇| from `min_speed` to

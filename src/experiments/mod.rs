@@ -27,7 +27,7 @@ use neurarm_physics::arm::{gravity_torques, mass_matrix, ArmParams, ArmState, Fr
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
 
-pub use friction::{bin_friction, friction_run, rest_pair, train_friction_net, FrictionPair, FrictionRun};
+pub use friction::{bin_friction, friction_run, rest_pair, train_friction_net, FrictionHold, FrictionPair, FrictionRun};
 pub use gravity::{gravity_grid, gravity_net_errors, gravity_sweep, train_gravity_net, GravityPair, GRAVITY_SWEEP_SPEED_RAD_S};
 pub use joint_space::{gravity_compensation_system, joint_rms_errors, joint_settled_errors};
 pub use tracking::{tracking_errors, tracking_mse, tracking_start, tracking_system, TrackingErrors, TRACKING_SEED_POSE};
@@ -62,6 +62,8 @@ pub struct Settings {
     pub velocity_spacing: f64,
     /// Bin width of the friction data [rad/s] (the paper: 0.05).
     pub bin_width: f64,
+    /// How the friction runs hold the other joints.
+    pub friction_hold: FrictionHold,
     /// Length of each tracking run [s].
     pub tracking_duration: f64,
     /// Gains of the task-space controller (acceleration level, so they need no scaling with
@@ -97,6 +99,7 @@ impl Settings {
             max_velocity: 5.0,
             velocity_spacing: 0.1,
             bin_width: 0.05,
+            friction_hold: FrictionHold::Rigid,
             tracking_duration: 4.0 * PI,
             tracking_gains: TaskSpaceGains::default(),
             gravity_test_points: 10_000,

@@ -299,8 +299,10 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         tasks.clone(),
         settings.threads,
         |(real, joint, dir)| {
-            friction_run(if real { &fmus.arm_real } else { &fmus.arm }, &fmus.joint_controller, model, joint, dir, settings)
-                .map_err(|e| format!("friction identification, {} arm: {e}", if real { "real" } else { "simulated" }))
+            friction_run(if real { &fmus.arm_real } else { &fmus.arm }, &fmus.joint_controller, model, joint, dir, settings).map_err(|e| {
+                let arm = if real { "real" } else { "simulated" };
+                format!("friction identification, {arm} arm, joint {} driven {}: {e}", joint + 1, if dir > 0.0 { "+" } else { "−" })
+            })
         },
         || b.inc(1),
     )?;
