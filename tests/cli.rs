@@ -247,3 +247,58 @@ fn written_files_are_readable_by_others() {
         assert_eq!(std::fs::metadata(&f).unwrap().permissions().mode() & 0o777, 0o644 & !umask, "{}", f.display());
     }
 }
+
+/// `neurarm paper` with `args` in a fresh folder: asserts failure, that stderr has every one of
+/// `expected`, and that no output folder (or staging folder) was left.
+fn paper_fails_with(args: &[&str], files: &[(&str, String)], expected: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in files {
+        write(dir.path(), name, text);
+    }
+    let assert = neurarm().current_dir(dir.path()).arg("paper").args(args).args(["-o", "run"]).assert().failure();
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    for e in expected {
+        assert!(stderr.contains(e), "stderr {stderr:?} lacks {e:?}");
+    }
+    let left: Vec<String> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert!(left.iter().all(|n| files.iter().any(|(f, _)| f == n)), "left behind: {left:?}");
+}
+
+fn arm_with_joints(n: usize) -> String {
+    let mut c = ArmConfig::default();
+    c.arm.links = (0..n).map(|i| c.arm.links[i % 4].clone()).collect();
+    c.arm.friction = (0..n).map(|i| c.arm.friction[i % 4]).collect();
+    c.to_toml_string()
+}
+
+#[test]
+fn paper_refuses_arms_it_cannot_run_and_says_why() {
+    paper_fails_with(&["-c", "one.toml"], &[("one.toml", arm_with_joints(1))], &["one.toml", "1 joint", "2 to 8"]);
+    paper_fails_with(&["-c", "nine.toml"], &[("nine.toml", arm_with_joints(9))], &["nine.toml", "9 joints", "2 to 8"]);
+    paper_fails_with(&["--real", "real3.toml"], &[("real3.toml", arm_with_joints(3))], &["real3.toml", "3 joints", "has 4"]);
+    paper_fails_with(&["--scale", "3"], &[], &["reach", "1.000 m"]);
+    paper_fails_with(&["--centre", "0.45"], &[], &["--centre takes two numbers"]);
+    paper_fails_with(&["--joint-gains", "50"], &[], &["--joint-gains takes two numbers"]);
+    paper_fails_with(&["-c", "broken.toml"], &[("broken.toml", "[arm]\ngravity_m_s2 = 9.81\n".into())], &["broken.toml"]);
+}
+
+#[test]
+fn paper_with_unstable_gains_fails_and_keeps_the_earlier_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    neurarm().args(["paper", "--quick", "-o"]).arg(&out).assert().success();
+    let before = std::fs::read(out.join("results.json")).unwrap();
+    let assert = neurarm().args(["paper", "--quick", "--joint-gains", "1e6,1e3", "-o"]).arg(&out).assert().failure();
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    assert!(stderr.contains("loop joint_") && stderr.contains("--joint-gains") && stderr.contains("no run was written"), "{stderr}");
+    assert_eq!(std::fs::read(out.join("results.json")).unwrap(), before, "the earlier run was replaced");
+    let left: Vec<String> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(left, ["run"], "staging folders left behind");
+    // A folder that is not a run is not replaced.
+    let other = dir.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "mine").unwrap();
+    let assert = neurarm().args(["paper", "--quick", "-o"]).arg(&other).assert().failure();
+    assert!(String::from_utf8_lossy(&assert.get_output().stderr).contains("not the folder of an earlier run"));
+    assert_eq!(std::fs::read_to_string(other.join("notes.txt")).unwrap(), "mine");
+}

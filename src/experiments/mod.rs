@@ -570,3 +570,59 @@ pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
     outcome.map_err(|e| format!("{} (at t = {:.3} s)", master(e), recorded.rows.last().map_or(sim.start, |r| r[0])))?;
     Ok(recorded)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arms_of_more_than_four_joints_get_a_coarser_grid_of_at_most_the_four_joint_size() {
+        let paper = Settings::paper();
+        let sizes: Vec<usize> = (2..=8).map(|n| paper.grid_for(n)).collect();
+        assert_eq!(sizes, [7, 7, 7, 4, 3, 3, 3]);
+        for n in 5..=7 {
+            assert!(paper.grid_for(n).pow(n as u32) <= 7usize.pow(4));
+        }
+        assert_eq!(Settings::quick().grid_for(6), 3);
+    }
+
+    #[test]
+    fn the_builtin_arm_keeps_the_papers_joint_gains_and_others_are_capped() {
+        let settings = Settings::paper();
+        let builtin = ArmParams::default_four_link();
+        assert_eq!(gravity_scale(&builtin), 1.0);
+        assert!(joint_loop_gains(&builtin, &settings).iter().all(|&g| g == (50.0, 2.0)));
+        // A light distal link: its gains are capped by its inertia, not the arm's load.
+        let mut light = builtin.clone();
+        light.links.push(neurarm_physics::arm::LinkParams::uniform_rod(0.05, 0.05));
+        light.friction.push(light.friction[3]);
+        let gains = joint_loop_gains(&light, &settings);
+        let inertia = lightest_inertias(&light);
+        let (kp, kd) = gains[4];
+        assert!(kp < 50.0 && (kp / inertia[4]).sqrt() <= JOINT_LOOP_MAX_RAD_S * (1.0 + 1e-12));
+        assert!(kd * settings.step / inertia[4] <= JOINT_LOOP_MAX_DAMPING_STEP * (1.0 + 1e-12));
+    }
+
+    #[test]
+    fn arms_outside_two_to_eight_joints_and_mismatched_real_arms_are_refused() {
+        let mut one = ArmConfig::default();
+        one.arm.links.truncate(1);
+        one.arm.friction.truncate(1);
+        let e = Arms::new(one, None, None).unwrap_err();
+        assert!(e.contains("1 joint;") && e.contains("2 to 8"), "{e}");
+        let mut nine = ArmConfig::default();
+        for _ in 0..5 {
+            nine.arm.links.push(nine.arm.links[3].clone());
+            nine.arm.friction.push(nine.arm.friction[3]);
+        }
+        assert!(Arms::new(nine, None, None).unwrap_err().contains("9 joints"));
+        let mut three = ArmConfig::default();
+        three.arm.links.truncate(3);
+        three.arm.friction.truncate(3);
+        let e = Arms::new(ArmConfig::default(), Some((three, "real3.toml".into())), None).unwrap_err();
+        assert!(e.contains("real3.toml") && e.contains("3 joints") && e.contains("has 4"), "{e}");
+        let far = ReferencePlacement { scale: 3.0, ..ReferencePlacement::for_arm(&ArmParams::default_four_link()) };
+        let e = Arms::new(ArmConfig::default(), None, Some(far)).unwrap_err();
+        assert!(e.contains("reach"), "{e}");
+    }
+}
