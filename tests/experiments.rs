@@ -13,6 +13,13 @@ use neurarm_physics::nn::WeightsFile;
 fn the_quick_paper_run_reproduces_the_papers_findings() {
     let out = tempfile::tempdir().unwrap();
     let settings = Settings::quick();
+    // The quick run identifies friction exactly as the full run does, so the pairs and nets
+    // checked here are the full run's.
+    let full = Settings::paper();
+    assert_eq!(
+        (settings.step, settings.max_velocity, settings.velocity_spacing, settings.bin_width, settings.friction_hold, settings.seed),
+        (full.step, full.max_velocity, full.velocity_spacing, full.bin_width, full.friction_hold, full.seed)
+    );
     let run = run_paper(out.path(), &Arms::builtin(), &settings, &mut |line| eprintln!("{line}")).unwrap();
     let r = &run.results;
     let t = r.table_1.mse_m2.to_array();
