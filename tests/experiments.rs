@@ -73,6 +73,11 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.path().join("results.json")).unwrap()).unwrap();
     assert_eq!(json["table_1"]["mse_m2"]["sim_nn"].as_f64(), Some(r.table_1.mse_m2.sim_nn), "results.json holds Table 1");
     assert_eq!(json["setup"]["joints"].as_u64(), Some(4));
+    for region in ["span", "whole_turn"] {
+        let shares = json["gravity"]["net"][region]["rms_share"].as_array().unwrap();
+        assert_eq!(shares.len(), 4, "gravity errors per joint over the {region}");
+        assert!(shares.iter().all(|s| s.as_f64().is_some_and(|s| s > 0.0 && s.is_finite())));
+    }
     assert_eq!(json["setup"]["real_origin"]["kind"].as_str(), Some("emulated"));
     for figure in ["friction.png", "tracking.png", "gravity.png", "gravity_compensation.png"] {
         assert!(out.path().join(figure).is_file(), "{figure} written");
@@ -175,7 +180,7 @@ fn the_full_gravity_identification_is_within_one_percent() {
     assert_eq!(pairs.len(), 2401);
     let net = train_gravity_net(&pairs, &settings, &mut |_| {}).unwrap();
     let errors = gravity_net_errors(&net, model, settings.grid, &settings).unwrap();
-    let (rms, largest) = (errors.rms_nm, errors.largest_torque_nm);
+    let (rms, largest) = (errors.span.rms_nm, errors.span.largest_torque_nm.iter().copied().fold(0.0, f64::max));
     let shares: Vec<f64> = rms.iter().map(|e| 100.0 * e / largest).collect();
     eprintln!("gravity net RMS {rms:?} N·m = {shares:.3?} % of {largest:.2} N·m");
     assert!(shares.iter().all(|&s| s < 1.0), "gravity net error {shares:?} % of the largest torque");

@@ -18,13 +18,15 @@ pub enum FrictionHold {
     /// the driven joint bend the held ones at speed, and the pairs with them.
     Pd,
     /// Computed torque from the nominal rigid-body model without gravity, τ_h = S u_h + c_h for
-    /// the held joints h: u_h = −K_d q̇_h − K_p q_h (K_p = 1600 1/s², K_d = 80 1/s, critically
-    /// damped at 40 rad/s), c the Coriolis and centrifugal torques, and S = H_hh − H_hf H_fh / H_ff
+    /// the held joints h: u_h = −K_d q̇_h − K_p q_h (K_p = 400 1/s², K_d = 40 1/s, critically
+    /// damped at 20 rad/s), c the Coriolis and centrifugal torques, and S = H_hh − H_hf H_fh / H_ff
     /// the held joints' inertia while the driven joint f moves freely. Then S q̈_h = S u_h −
     /// H_hf q̈_f: the held joints settle exactly once the driven one runs at constant speed, in
     /// every pose, so the coupling no longer bends the measurement. (With H_hh in place of S,
     /// i.e. assuming q̈_f = 0 in the control law, the loop's real gain was up to 50 × the
-    /// designed one and sensor noise made it diverge.)
+    /// designed one and sensor noise made it diverge. At 40 rad/s the noise of the measured
+    /// angles and speeds made the held joints jitter, and their friction was measured as the
+    /// driven joint's: +0.2 N·m on the emulated 6-joint arm; at 20 rad/s, 0.04 N·m.)
     Rigid,
 }
 

@@ -175,23 +175,63 @@ pub fn train_gravity_net(pairs: &[GravityPair], settings: &Settings, on_epoch: &
     Ok(WeightsFile::new(&trained.net, signals("q", "rad"), signals("tau_gravity", "N.m"), train_settings, trained.report))
 }
 
+/// A gravity net's error over random poses of one region, per joint.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RegionErrors {
+    /// RMS of net − truth [N·m].
+    pub rms_nm: Vec<f64>,
+    /// Largest |net − truth| [N·m].
+    pub max_nm: Vec<f64>,
+    /// Largest |true gravity torque| of the joint [N·m].
+    pub largest_torque_nm: Vec<f64>,
+    /// `rms_nm` as a share of the joint's own largest torque.
+    pub rms_share: Vec<f64>,
+    /// `max_nm` as a share of the joint's own largest torque.
+    pub max_share: Vec<f64>,
+}
+
+impl RegionErrors {
+    fn new(joints: usize) -> Self {
+        Self { rms_nm: vec![0.0; joints], max_nm: vec![0.0; joints], largest_torque_nm: vec![0.0; joints], ..Self::default() }
+    }
+
+    fn add(&mut self, truth: &[f64], guess: &[f64]) {
+        for i in 0..truth.len() {
+            let e = guess[i] - truth[i];
+            self.rms_nm[i] += e * e;
+            self.max_nm[i] = self.max_nm[i].max(e.abs());
+            self.largest_torque_nm[i] = self.largest_torque_nm[i].max(truth[i].abs());
+        }
+    }
+
+    fn finish(mut self, poses: usize) -> Self {
+        for s in self.rms_nm.iter_mut() {
+            *s = (*s / poses.max(1) as f64).sqrt();
+        }
+        self.rms_share = self.rms_nm.iter().zip(&self.largest_torque_nm).map(|(e, m)| e / m).collect();
+        self.max_share = self.max_nm.iter().zip(&self.largest_torque_nm).map(|(e, m)| e / m).collect();
+        self
+    }
+}
+
 /// The gravity net's error against the true gravity of the arm (base turned 90°).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct GravityNetErrors {
-    /// RMS error per joint [N·m].
-    pub rms_nm: Vec<f64>,
-    /// Largest |gravity torque| met, any joint [N·m].
-    pub largest_torque_nm: f64,
-    /// Random poses tested.
+    /// On poses within the trained span of the grid (the paper's reading).
+    pub span: RegionErrors,
+    /// On poses over the whole turn [0, 2π)ⁿ, each angle wrapped into the net's trained turn
+    /// as the `NnCompensator` FMU does: what a user of the compensator gets.
+    pub whole_turn: RegionErrors,
+    /// Random poses per region.
     pub poses: usize,
-    /// Each pose's (true torque, net − truth) per joint [N·m], for the figure.
+    /// Each whole-turn pose's (true torque, net − truth) per joint [N·m], for the figure.
     #[serde(skip)]
     pub samples: Vec<Vec<(f64, f64)>>,
 }
 
 /// The gravity net against the true gravity of `arm` (base turned 90°) on
-/// `settings.gravity_test_points` random configurations within the span of a `grid`-point
-/// grid (not grid points).
+/// `settings.gravity_test_points` random poses (not grid points) within the span of a
+/// `grid`-point grid, and as many over the whole turn.
 pub fn gravity_net_errors(
     gravity_net: &WeightsFile,
     arm: &ArmParams,
@@ -202,27 +242,26 @@ pub fn gravity_net_errors(
     let n = arm.dof();
     let net = gravity_net.network()?;
     let span = 2.0 * PI * (grid as f64 - 1.0) / grid as f64;
+    let low = &gravity_net.input_scaling.min;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(settings.seed + 99);
-    let mut sq = vec![0.0; n];
-    let mut worst: f64 = 0.0;
+    let (mut in_span, mut whole) = (RegionErrors::new(n), RegionErrors::new(n));
     let mut samples = vec![Vec::with_capacity(settings.gravity_test_points); n];
     for _ in 0..settings.gravity_test_points {
         let q: Vec<f64> = (0..n).map(|_| rng.gen::<f64>() * span).collect();
-        let truth = gravity_torques(&vertical, &q);
-        let guess = net.evaluate(&q);
+        in_span.add(gravity_torques(&vertical, &q).as_slice(), &net.evaluate(&q));
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(settings.seed + 101);
+    for _ in 0..settings.gravity_test_points {
+        let q: Vec<f64> = (0..n).map(|_| rng.gen::<f64>() * 2.0 * PI).collect();
+        let wrapped: Vec<f64> = (0..n).map(|i| low[i] + (q[i] - low[i]).rem_euclid(2.0 * PI)).collect();
+        let (truth, guess) = (gravity_torques(&vertical, &q), net.evaluate(&wrapped));
+        whole.add(truth.as_slice(), &guess);
         for i in 0..n {
-            sq[i] += (guess[i] - truth[i]).powi(2);
-            worst = worst.max(truth[i].abs());
             samples[i].push((truth[i], guess[i] - truth[i]));
         }
     }
-    let count = settings.gravity_test_points.max(1) as f64;
-    Ok(GravityNetErrors {
-        rms_nm: sq.iter().map(|s| (s / count).sqrt()).collect(),
-        largest_torque_nm: worst,
-        poses: settings.gravity_test_points,
-        samples,
-    })
+    let poses = settings.gravity_test_points;
+    Ok(GravityNetErrors { span: in_span.finish(poses), whole_turn: whole.finish(poses), poses, samples })
 }
 
 /// The largest |averaged torque − true gravity at the averaged angles| over `pairs` [N·m]:

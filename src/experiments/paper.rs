@@ -137,7 +137,8 @@ pub struct GravityResults {
     pub hidden: usize,
     /// The net against the true gravity on random poses.
     pub net: GravityNetErrors,
-    /// `net.rms_nm` per joint as a share of `net.largest_torque_nm`.
+    /// RMS error per joint over the trained span as a share of the largest gravity torque of
+    /// any joint (the paper's reading; see `net` for each joint's own share and the whole turn).
     pub net_error_share: Vec<f64>,
 }
 
@@ -394,7 +395,10 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         pairs: gravity_pairs.len(),
         pair_error_nm: gravity_pair_error(&gravity_pairs, model),
         hidden: settings.gravity_hidden,
-        net_error_share: net_errors.rms_nm.iter().map(|e| e / net_errors.largest_torque_nm).collect(),
+        net_error_share: {
+            let largest = net_errors.span.largest_torque_nm.iter().copied().fold(0.0, f64::max);
+            net_errors.span.rms_nm.iter().map(|e| e / largest).collect()
+        },
         net: net_errors,
     };
     lap("training gravity net", log);

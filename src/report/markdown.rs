@@ -40,7 +40,7 @@ pub fn report_markdown(run: &PaperRun) -> String {
     // The summary: what the run shows, in one paragraph.
     let sim_friction = r.friction.iter().filter(|f| f.arm == "sim");
     let worst_friction = sim_friction.map(|f| (f.net_error_share, f.joint)).fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
-    let worst_gravity = r.gravity.net_error_share.iter().copied().fold(0.0, f64::max);
+    let worst_gravity = r.gravity.net.whole_turn.rms_share.iter().copied().fold(0.0, f64::max);
     let settled = |k: usize| r.joint_loop.settled_rad[k].iter().copied().fold(0.0, f64::max);
     let _ = writeln!(
         s,
@@ -48,7 +48,8 @@ pub fn report_markdown(run: &PaperRun) -> String {
          {:.3} mm with NN friction compensation, against {:.3} mm with the true friction model and {:.3} mm without compensation \
          (MSE ratios NN/perfect {:.3}, none/perfect {:.1}). On the {real} arm, the net trained on its own data cuts the error from \
          {:.3} mm to {:.3} mm (MSE ratio NN/none {:.3}; true positions). The friction nets of the simulated arm are within {:.1} % \
-         of each joint's largest friction torque (worst: joint {}), the gravity net within {:.2} % of the largest gravity torque{}. \
+         of each joint's largest friction torque (worst: joint {}); the gravity net's RMS error over the whole turn is up to {:.2} % \
+         of a joint's own largest gravity torque{}. \
          In the joint-space loop, NN gravity compensation settles to at most {:.4} rad from the targets, against {:.4} rad with the \
          ideal compensator and {:.4} rad without.{}\n",
         setup.reach_m,
@@ -116,8 +117,7 @@ pub fn report_markdown(run: &PaperRun) -> String {
     let _ = writeln!(
         s,
         "Gains: task space K_p = {} 1/s², K_d = {} 1/s, null-space damping {} 1/s (acceleration level: the same for any arm). \
-         Joint-space loop K_p = {} N·m/rad, K_d = {} N·m·s/rad per joint{}. The identification holds the other joints with an inertia-scaled PD \
-         (critically damped at 40 rad/s for the lightest pose each joint presents).\n",
+         Joint-space loop K_p = {} N·m/rad, K_d = {} N·m·s/rad per joint{}. The gravity sweep holds the joints by computed torque from the gravity-free rigid-body model at 40 rad/s.\n",
         settings.tracking_gains.kp,
         settings.tracking_gains.kd,
         settings.tracking_gains.null_damping,
@@ -189,10 +189,13 @@ pub fn report_markdown(run: &PaperRun) -> String {
     let _ = writeln!(s, "## Friction identification\n");
     let _ = writeln!(
         s,
-        "Constant torques on one joint, the others held by the joint controller; steady velocity per level; samples binned by {} \
-         rad/s over ±{} rad/s; mean torque per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway \
+        "Constant torques on one joint, the others held rigidly by computed torque from the nominal rigid-body model (see \
+         `FrictionHold::Rigid`), raised level by level until the speed passes {1} rad/s; each level's torque corrected by the fitted \
+         acceleration (friction = τ − H_ff q̈); below the first moving level, where constant torques cannot hold a Stribeck joint, \
+         speed-controlled levels down to {0} rad/s. Samples binned by {0} \
+         rad/s over ±{1} rad/s; mean torque per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway \
          torques; see `rest_pair`). The pairs and nets are checked against the true law of the arm they were measured on: pair error \
-         is the largest |pair − law| over the moving pairs, net error the RMS of net − law over {} ≤ |q̇| ≤ {} rad/s, also as a share \
+         is the largest |pair − law| over the moving pairs, net error the RMS of net − law over {2} ≤ |q̇| ≤ {3} rad/s, also as a share \
          of the joint's largest friction torque. Data: `data/friction_*_joint*.csv`; nets: `nets/friction_*.json`.\n",
         settings.bin_width, settings.max_velocity, 0.2, settings.max_velocity
     );
@@ -241,25 +244,29 @@ pub fn report_markdown(run: &PaperRun) -> String {
          gravity torque at the averaged angles is {:.2e} N·m (what remains of friction, Coriolis terms and lag).\n",
         g.pair_error_nm
     );
+    let largest_any = g.net.span.largest_torque_nm.iter().copied().fold(0.0, f64::max);
     let _ = writeln!(
         s,
-        "Error on {} random configurations within the grid's span (not grid points), as RMS per joint and as a share of the largest \
-         gravity torque ({:.2} N·m); `gravity.png` shows each pose's error against its true torque:\n",
-        g.net.poses, g.net.largest_torque_nm
+        "Error on {} random poses (not grid points) in two regions: within the grid's span [0, 2π(k−1)/k)ⁿ, the paper's reading, \
+         and over the whole turn [0, 2π)ⁿ with each angle wrapped into the trained turn as the `NnCompensator` FMU does, which is \
+         what a user of the compensator gets (the net is not periodic, and the grid never covers the last 1/k of the turn). \
+         Shares are of each joint's own largest gravity torque; the paper's reading divides every joint by the largest of all \
+         ({largest_any:.2} N·m). `gravity.png` shows each whole-turn pose's error against its true torque:\n",
+        g.net.poses
     );
     let _ = writeln!(s, "{}", header("", n));
-    let _ = writeln!(
-        s,
-        "{}",
-        row(&std::iter::once("RMS error [N·m]".to_owned()).chain(g.net.rms_nm.iter().map(|e| format!("{e:.4}"))).collect::<Vec<_>>())
-    );
-    let _ = writeln!(
-        s,
-        "{}",
-        row(&std::iter::once("share of max".to_owned())
-            .chain(g.net_error_share.iter().map(|e| format!("{:.3} %", 100.0 * e)))
-            .collect::<Vec<_>>())
-    );
+    let line = |label: &str, values: &[f64], f: &dyn Fn(f64) -> String| {
+        row(&std::iter::once(label.to_owned()).chain(values.iter().map(|&v| f(v))).collect::<Vec<_>>())
+    };
+    let nm = |v: f64| format!("{v:.4}");
+    let pct = |v: f64| format!("{:.2} %", 100.0 * v);
+    for (region, e) in [("span", &g.net.span), ("whole turn", &g.net.whole_turn)] {
+        let _ = writeln!(s, "{}", line(&format!("{region}: RMS [N·m]"), &e.rms_nm, &nm));
+        let _ = writeln!(s, "{}", line(&format!("{region}: RMS, share of the joint's largest torque"), &e.rms_share, &pct));
+        let _ = writeln!(s, "{}", line(&format!("{region}: largest error [N·m]"), &e.max_nm, &nm));
+        let _ = writeln!(s, "{}", line(&format!("{region}: largest error, share"), &e.max_share, &pct));
+    }
+    let _ = writeln!(s, "{}", line("span: RMS, share of the largest torque of all (the paper's reading)", &g.net_error_share, &pct));
 
     let j = &r.joint_loop;
     let _ = writeln!(s, "\n## Gravity compensation in the joint-space loop\n");
