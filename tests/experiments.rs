@@ -43,16 +43,8 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
     }
     // Every closed loop as a system file and an SSP archive; the system file reruns the
     // recorded run exactly (tests/python/test_closed_loops.py reruns it without our master).
-    for name in [
-        "tracking_sim_perfect",
-        "tracking_sim_nn",
-        "tracking_sim_none",
-        "tracking_real_nn",
-        "tracking_real_none",
-        "joint_ideal",
-        "joint_nn",
-        "joint_none",
-    ] {
+    assert_eq!(neurarm::experiments::paper::LOOPS.len(), 8);
+    for name in neurarm::experiments::paper::LOOPS {
         assert!(out.path().join(format!("{name}.ssp")).is_file(), "{name}.ssp written");
         let path = out.path().join(format!("systems/{name}.toml"));
         let spec = SystemSpec::from_toml(&std::fs::read_to_string(&path).unwrap(), name).unwrap();
