@@ -90,6 +90,10 @@ enum Command {
         /// scaled by the arm's gravity load relative to the built-in arm).
         #[arg(long, value_delimiter = ',')]
         joint_gains: Option<Vec<f64>>,
+        /// Measure gravity at this many poses drawn over the whole turn instead of the paper's
+        /// grid (7ⁿ up to 4 joints, coarser beyond).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(10..=100_000))]
+        gravity_poses: Option<u64>,
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig,
@@ -311,8 +315,8 @@ fn run(cli: Cli) -> Result<()> {
                 Some(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", outcome.rows.len(), output.display()),
             }
         }
-        Command::Paper { config, real, output, quick, threads, seed, centre, scale, tracking_gains, joint_gains } => {
-            use neurarm::experiments::{paper::run_paper, Arms, Settings};
+        Command::Paper { config, real, output, quick, threads, seed, centre, scale, tracking_gains, joint_gains, gravity_poses } => {
+            use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
             let mut settings = if quick { Settings::quick() } else { Settings::paper() };
             if let Some(s) = seed {
                 settings.seed = s;
@@ -324,6 +328,9 @@ fn run(cli: Cli) -> Result<()> {
                 let (kp, kd) = gain_pair("--tracking-gains", &g)?;
                 settings.tracking_gains.kp = kp;
                 settings.tracking_gains.kd = kd;
+            }
+            if let Some(poses) = gravity_poses {
+                settings.gravity_design = GravityDesign::Sampled { poses: poses as usize };
             }
             if let Some(g) = joint_gains {
                 (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", &g)?;

@@ -302,3 +302,23 @@ fn paper_with_unstable_gains_fails_and_keeps_the_earlier_run() {
     assert!(String::from_utf8_lossy(&assert.get_output().stderr).contains("not the folder of an earlier run"));
     assert_eq!(std::fs::read_to_string(other.join("notes.txt")).unwrap(), "mine");
 }
+
+#[test]
+fn paper_measures_gravity_at_sampled_poses_over_the_whole_turn() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let arm = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/arms/arm3.toml");
+    neurarm().args(["paper", "--quick", "--gravity-poses", "120", "-c"]).arg(&arm).arg("-o").arg(&out).assert().success();
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["gravity"]["design"]["kind"].as_str(), Some("sampled"));
+    assert_eq!(json["gravity"]["pairs"].as_u64(), Some(120));
+    let pairs = NumericTable::read(&out.join("data/gravity_pairs.csv"), &["q_1", "q_2", "q_3"]).unwrap();
+    for name in ["q_1", "q_2", "q_3"] {
+        let q = pairs.column(name).unwrap();
+        assert!(q.iter().all(|&a| (0.0..2.0 * std::f64::consts::PI).contains(&a)), "{name} wrapped into the turn");
+        // Poses over the whole turn, not only the grid's span [0, 2π·2/3).
+        assert!(q.iter().any(|&a| a > 2.0 * std::f64::consts::PI * 5.0 / 6.0), "{name} reaches the last sixth of the turn");
+    }
+    let e = neurarm().args(["paper", "--gravity-poses", "3", "-o"]).arg(dir.path().join("x")).assert().failure();
+    assert!(String::from_utf8_lossy(&e.get_output().stderr).contains("--gravity-poses"));
+}

@@ -36,6 +36,36 @@ pub fn gravity_grid(grid: usize, joints: usize) -> Vec<Vec<f64>> {
     points.into_iter().map(|p| p.iter().map(|&i| i as f64 * step).collect()).collect()
 }
 
+/// `poses` poses drawn uniformly over [0, 2π)ⁿ from `seed`, ordered for the sweep: from each
+/// pose to the nearest one not yet visited (largest joint difference, each angle taken modulo
+/// 2π), and each pose shifted by whole turns to the representative nearest the previous one, so
+/// the arm never travels more than half a turn per joint between poses. Gravity is
+/// 2π-periodic in every angle, so the shifted poses measure the same torques; wrap the
+/// measured angles back into [0, 2π) before training.
+pub fn sampled_poses(poses: usize, joints: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut left: Vec<Vec<f64>> = (0..poses).map(|_| (0..joints).map(|_| rng.gen::<f64>() * 2.0 * PI).collect()).collect();
+    let nearest_turn = |a: f64, b: f64| b + ((a - b) / (2.0 * PI)).round() * 2.0 * PI;
+    let mut path: Vec<Vec<f64>> = Vec::with_capacity(poses);
+    while !left.is_empty() {
+        let next = match path.last() {
+            None => 0,
+            Some(current) => {
+                let distance = |p: &Vec<f64>| p.iter().zip(current).map(|(b, a)| (nearest_turn(*a, *b) - a).abs()).fold(0.0, f64::max);
+                (0..left.len()).min_by(|&i, &j| distance(&left[i]).total_cmp(&distance(&left[j]))).expect("poses left")
+            }
+        };
+        let mut pose = left.swap_remove(next);
+        if let Some(current) = path.last() {
+            for (b, a) in pose.iter_mut().zip(current) {
+                *b = nearest_turn(*a, *b);
+            }
+        }
+        path.push(pose);
+    }
+    path
+}
+
 /// Speed of the gravity sweep's passes [rad/s].
 pub const GRAVITY_SWEEP_SPEED_RAD_S: f64 = 0.25;
 const SWEEP_SPEED: f64 = GRAVITY_SWEEP_SPEED_RAD_S;
@@ -217,7 +247,8 @@ impl RegionErrors {
 /// The gravity net's error against the true gravity of the arm (base turned 90°).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct GravityNetErrors {
-    /// On poses within the trained span of the grid (the paper's reading).
+    /// On poses within the trained span: the grid's (the paper's reading), or the whole turn
+    /// for a sampled design.
     pub span: RegionErrors,
     /// On poses over the whole turn [0, 2π)ⁿ, each angle wrapped into the net's trained turn
     /// as the `NnCompensator` FMU does: what a user of the compensator gets.
@@ -230,18 +261,12 @@ pub struct GravityNetErrors {
 }
 
 /// The gravity net against the true gravity of `arm` (base turned 90°) on
-/// `settings.gravity_test_points` random poses (not grid points) within the span of a
-/// `grid`-point grid, and as many over the whole turn.
-pub fn gravity_net_errors(
-    gravity_net: &WeightsFile,
-    arm: &ArmParams,
-    grid: usize,
-    settings: &Settings,
-) -> Result<GravityNetErrors, String> {
+/// `settings.gravity_test_points` random poses (not training poses) within the trained span
+/// [0, `span`)ⁿ [rad], and as many over the whole turn.
+pub fn gravity_net_errors(gravity_net: &WeightsFile, arm: &ArmParams, span: f64, settings: &Settings) -> Result<GravityNetErrors, String> {
     let vertical = arm.clone().with_base_angle(PI / 2.0);
     let n = arm.dof();
     let net = gravity_net.network()?;
-    let span = 2.0 * PI * (grid as f64 - 1.0) / grid as f64;
     let low = &gravity_net.input_scaling.min;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(settings.seed + 99);
     let (mut in_span, mut whole) = (RegionErrors::new(n), RegionErrors::new(n));

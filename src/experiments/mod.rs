@@ -26,9 +26,11 @@ use neurarm_physics::arm::{gravity_torques, mass_matrix, ArmParams, ArmState};
 use neurarm_physics::config::ArmConfig;
 
 pub use friction::{bin_friction, friction_run, rest_pair, train_friction_net, FrictionHold, FrictionPair, FrictionRun};
-pub use gravity::{gravity_grid, gravity_net_errors, gravity_sweep, train_gravity_net, GravityPair, GRAVITY_SWEEP_SPEED_RAD_S};
+pub use gravity::{
+    gravity_grid, gravity_net_errors, gravity_sweep, sampled_poses, train_gravity_net, GravityPair, GRAVITY_SWEEP_SPEED_RAD_S,
+};
 pub use joint_space::{gravity_compensation_system, joint_rms_errors, joint_settled_errors};
-pub use settings::{emulated_real_arm, Arms, RealOrigin, Settings, MAX_JOINTS, MIN_JOINTS};
+pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_JOINTS, MIN_JOINTS};
 pub use tracking::{tracking_errors, tracking_mse, tracking_start, tracking_system, TrackingErrors, TRACKING_SEED_POSE};
 
 /// RK4 sub-step of the arm in the identification runs [s]: one per 1 ms communication step.
@@ -377,6 +379,32 @@ mod tests {
             assert!(paper.grid_for(n).pow(n as u32) <= 7usize.pow(4));
         }
         assert_eq!(Settings::quick().grid_for(6), 3);
+    }
+
+    #[test]
+    fn sampled_poses_cover_the_turn_and_the_path_moves_at_most_half_a_turn_per_joint() {
+        let poses = sampled_poses(500, 3, 5);
+        assert_eq!(poses.len(), 500);
+        for w in poses.windows(2) {
+            assert!(w[0].iter().zip(&w[1]).all(|(a, b)| (a - b).abs() <= PI + 1e-12), "{:?} → {:?}", w[0], w[1]);
+        }
+        // Wrapped back, the poses fill the turn: every joint has poses in each quarter.
+        for j in 0..3 {
+            let mut quarters = [0usize; 4];
+            for p in &poses {
+                quarters[(p[j].rem_euclid(2.0 * PI) / (PI / 2.0)) as usize % 4] += 1;
+            }
+            assert!(quarters.iter().all(|&c| c > 80), "joint {j}: {quarters:?}");
+        }
+        // The nearest-neighbour order travels far less than the drawing order would.
+        let travel = |path: &[Vec<f64>]| -> f64 {
+            path.windows(2).map(|w| w[0].iter().zip(&w[1]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)).sum()
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        use rand::{Rng, SeedableRng};
+        let drawn: Vec<Vec<f64>> = (0..500).map(|_| (0..3).map(|_| rng.gen::<f64>() * 2.0 * PI).collect()).collect();
+        assert!(travel(&poses) < 0.5 * travel(&drawn), "{} vs {}", travel(&poses), travel(&drawn));
+        assert_eq!(sampled_poses(500, 3, 5), poses, "seeded");
     }
 
     #[test]

@@ -125,7 +125,9 @@ pub struct FrictionJoint {
 /// The gravity identification.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct GravityResults {
-    /// Grid points per joint.
+    /// The design of the poses.
+    pub design: GravityDesign,
+    /// Grid points per joint (of the grid design).
     pub grid_per_joint: usize,
     /// Whether the grid is coarser than `Settings::grid` because of the joint count.
     pub coarse_grid: bool,
@@ -368,7 +370,10 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
 
     // Gravity identification: the grid split between the workers.
     let grid_per_joint = settings.grid_for(n);
-    let grid = gravity_grid(grid_per_joint, n);
+    let (grid, span) = match settings.gravity_design {
+        GravityDesign::Grid => (gravity_grid(grid_per_joint, n), 2.0 * PI * (grid_per_joint as f64 - 1.0) / grid_per_joint as f64),
+        GravityDesign::Sampled { poses } => (sampled_poses(poses, n, settings.seed + 17), 2.0 * PI),
+    };
     let chunk = grid.len().div_ceil(settings.threads.max(1));
     let chunks: Vec<Vec<Vec<f64>>> = grid.chunks(chunk).map(|c| c.to_vec()).collect();
     let b = bar(chunks.len() as u64, "gravity identification");
@@ -381,17 +386,24 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         || b.inc(1),
     )?;
     b.finish_and_clear();
-    let gravity_pairs: Vec<GravityPair> = swept.into_iter().flat_map(|(p, _)| p).collect();
+    let mut gravity_pairs: Vec<GravityPair> = swept.into_iter().flat_map(|(p, _)| p).collect();
+    if let GravityDesign::Sampled { .. } = settings.gravity_design {
+        // The sampled path shifts poses by whole turns; gravity is 2π-periodic in each angle.
+        for (q, _) in gravity_pairs.iter_mut() {
+            q.iter_mut().for_each(|a| *a = a.rem_euclid(2.0 * PI));
+        }
+    }
     lap("gravity identification", log);
     let b = bar(settings.gravity_epochs as u64, &format!("gravity net ({n}-{}-{n})", settings.gravity_hidden));
     let gravity_net = train_gravity_net(&gravity_pairs, settings, &mut |e| b.set_position(e as u64))?;
     b.finish_and_clear();
     let gravity_path = net_dir.join("gravity.json");
     write_text_atomic(&gravity_path, &gravity_net.to_json()).map_err(io(&gravity_path))?;
-    let net_errors = gravity_net_errors(&gravity_net, model, grid_per_joint, settings)?;
+    let net_errors = gravity_net_errors(&gravity_net, model, span, settings)?;
     let gravity = GravityResults {
+        design: settings.gravity_design,
         grid_per_joint,
-        coarse_grid: grid_per_joint < settings.grid,
+        coarse_grid: settings.gravity_design == GravityDesign::Grid && grid_per_joint < settings.grid,
         pairs: gravity_pairs.len(),
         pair_error_nm: gravity_pair_error(&gravity_pairs, model),
         hidden: settings.gravity_hidden,

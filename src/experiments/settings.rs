@@ -24,6 +24,8 @@ pub struct Settings {
     /// Gravity grid points per joint for arms of up to 4 joints (the paper: 7); more joints get
     /// a coarser grid, see [`Settings::grid_for`].
     pub grid: usize,
+    /// Poses of the gravity identification: the paper's grid, or sampled.
+    pub gravity_design: GravityDesign,
     /// Largest joint speed of the friction experiment [rad/s] (the paper: 5).
     pub max_velocity: f64,
     /// Wanted spacing of the steady velocities of successive torque levels [rad/s].
@@ -64,6 +66,7 @@ impl Settings {
         Self {
             step: 1e-3,
             grid: 7,
+            gravity_design: GravityDesign::Grid,
             max_velocity: 5.0,
             velocity_spacing: 0.1,
             bin_width: 0.05,
@@ -110,6 +113,21 @@ impl Settings {
         }
         k.min(self.grid)
     }
+}
+
+/// The poses the gravity identification measures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum GravityDesign {
+    /// The paper's kⁿ grid over [0, 2π(k−1)/k) ([`Settings::grid_for`]).
+    #[default]
+    Grid,
+    /// `poses` poses drawn uniformly over the whole turn [0, 2π)ⁿ (seeded), visited in a
+    /// nearest-neighbour order (see `gravity::sampled_poses`).
+    Sampled {
+        /// Number of poses.
+        poses: usize,
+    },
 }
 
 /// Where the run's "real" arm comes from.

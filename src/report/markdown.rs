@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use super::figures::real_label;
 use crate::experiments::paper::{Cases, PaperRun};
-use crate::experiments::{RealOrigin, GRAVITY_SWEEP_SPEED_RAD_S};
+use crate::experiments::{GravityDesign, RealOrigin, GRAVITY_SWEEP_SPEED_RAD_S};
 
 fn row(cells: &[String]) -> String {
     format!("| {} |", cells.join(" | "))
@@ -231,12 +231,19 @@ pub fn report_markdown(run: &PaperRun) -> String {
     } else {
         String::new()
     };
+    let poses = match g.design {
+        GravityDesign::Grid => format!("a {}ⁿ grid = {} configurations", g.grid_per_joint, g.pairs),
+        GravityDesign::Sampled { poses } => format!(
+            "{poses} configurations drawn uniformly over the whole turn [0, 2π)ⁿ (`--gravity-poses`), visited in a nearest-neighbour \
+             order (see `sampled_poses`)"
+        ),
+    };
     let _ = writeln!(
         s,
-        "Base turned 90°; a {}ⁿ grid = {} configurations, each passed slowly up and down by all joints ({} rad/s), torques of the two \
+        "Base turned 90°; {poses}, each passed slowly up and down by all joints ({} rad/s), torques of the two \
          passes averaged; the joints held on the moves by an inertia-scaled PD from the gravity-free rigid-body model (see \
          `gravity_sweep`). A {n}-{}-{n} net trained on them (`nets/gravity.json`).{grid_note}\n",
-        g.grid_per_joint, g.pairs, GRAVITY_SWEEP_SPEED_RAD_S, g.hidden
+        GRAVITY_SWEEP_SPEED_RAD_S, g.hidden
     );
     let _ = writeln!(
         s,
