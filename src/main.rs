@@ -90,9 +90,9 @@ enum Command {
         /// scaled by the arm's gravity load relative to the built-in arm).
         #[arg(long, value_delimiter = ',')]
         joint_gains: Option<Vec<f64>>,
-        /// Measure gravity at this many poses drawn over the whole turn instead of the paper's
-        /// grid (7ⁿ up to 4 joints, coarser beyond).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(10..=100_000))]
+        /// Measure gravity at this many poses (10 to 20 000) drawn over the whole turn instead
+        /// of the paper's grid (7ⁿ up to 4 joints, coarser beyond).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(10..=20_000))]
         gravity_poses: Option<u64>,
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
