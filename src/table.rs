@@ -190,3 +190,8 @@ pub fn write_atomic(path: &Path, names: &[String], rows: impl Iterator<Item = Ve
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
 }
+
+/// An `io::Error` of writing `path` as a message naming the file, for `map_err`.
+pub fn writing(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
+    move |e| format!("writing {}: {e}", path.display())
+}

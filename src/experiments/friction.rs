@@ -102,7 +102,7 @@ const STEADY_FLOOR_RAD_S: f64 = 2e-3;
 const ACCELERATION_WINDOWS: usize = 5;
 
 /// Least-squares slope of `samples` taken every `step` seconds [unit of the samples per s].
-fn slope_per_second(samples: &std::collections::VecDeque<f64>, step: f64) -> f64 {
+fn slope_per_second(samples: &[f64], step: f64) -> f64 {
     let n = samples.len();
     if n < 2 {
         return 0.0;
@@ -244,7 +244,7 @@ pub fn friction_run(
             // What is left of the approach to the steady state: friction = τ − H_ff q̈_f, with q̈_f
             // the slope of the level's last samples (up to 0.5 s). Only the rigid hold keeps
             // the driven joint's inertia at H_ff.
-            let friction = if rigid { tau - inertia * slope_per_second(&history, settings.step) } else { tau };
+            let friction = if rigid { tau - inertia * slope_per_second(history.make_contiguous(), settings.step) } else { tau };
             run.samples.extend(buf.iter().map(|&x| (x, friction)));
         } else if run.levels.is_empty() {
             run.breakaway = (tau, run.breakaway.1 + 1);
@@ -301,9 +301,8 @@ pub fn friction_run(
                 }
                 let mean = speeds.iter().sum::<f64>() / speeds.len() as f64;
                 if (mean - wanted).abs() < 0.5 * target {
-                    let history: std::collections::VecDeque<f64> = speeds.iter().copied().collect();
                     let torque = torques.iter().sum::<f64>() / torques.len() as f64;
-                    let friction = torque - inertia * slope_per_second(&history, settings.step);
+                    let friction = torque - inertia * slope_per_second(&speeds, settings.step);
                     run.samples.extend(speeds.iter().map(|_| (mean, friction)));
                     run.speed_levels += 1;
                     break;

@@ -10,7 +10,7 @@ use serde::Serialize;
 use super::friction::{friction_net_error, hold_gains, pair_error, FrictionNetError};
 use super::gravity::{gravity_pair_error, GravityNetErrors};
 use super::*;
-use crate::table::write_text_atomic;
+use crate::table::{write_text_atomic, writing};
 use neurarm_physics::nn::WeightsFile;
 
 /// The paper's Table 1 [m²]: sim perfect, sim NN, sim none, real NN, real none.
@@ -229,10 +229,6 @@ fn bar(len: u64, what: &str) -> ProgressBar {
     b
 }
 
-fn io(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
-    move |e| format!("writing {}: {e}", path.display())
-}
-
 /// Runs every experiment on `arms` with `settings`, then has `crate::report` write the run;
 /// `log` gets one line per stage. Everything is written into a staging folder beside `out`
 /// that replaces `out` only when the whole run has succeeded, so a failed run leaves no
@@ -350,7 +346,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         let tag = if k == 0 { "sim" } else { "real" };
         let name = format!("friction_{tag}_joint{}.json", joint + 1);
         let path = net_dir.join(&name);
-        write_text_atomic(&path, &net.to_json()).map_err(io(&path))?;
+        write_text_atomic(&path, &net.to_json()).map_err(writing(&path))?;
         friction_files[k].push((format!("friction_{}.json", joint + 1), path));
         let law = if k == 0 { &arms.nominal.arm.friction[joint] } else { &arms.real.arm.friction[joint] };
         let (pair_error_nm, pair_error_at_rad_s) = pair_error(&friction_pairs[k][joint], law);
@@ -398,7 +394,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     let gravity_net = train_gravity_net(&gravity_pairs, settings, &mut |e| b.set_position(e as u64))?;
     b.finish_and_clear();
     let gravity_path = net_dir.join("gravity.json");
-    write_text_atomic(&gravity_path, &gravity_net.to_json()).map_err(io(&gravity_path))?;
+    write_text_atomic(&gravity_path, &gravity_net.to_json()).map_err(writing(&gravity_path))?;
     let net_errors = gravity_net_errors(&gravity_net, model, span, settings)?;
     let gravity = GravityResults {
         design: settings.gravity_design,
@@ -458,7 +454,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
             "# The {name} loop of `neurarm paper`; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
             spec.to_toml()?
         );
-        write_text_atomic(&toml, &text).map_err(io(&toml))?;
+        write_text_atomic(&toml, &text).map_err(writing(&toml))?;
         fmi2_cosim::ssp::write_ssp(spec, &systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
     }
     let b = bar(specs.len() as u64, "closed loops");

@@ -9,19 +9,15 @@ use std::path::Path;
 
 use crate::experiments::paper::{PaperRun, LOOPS};
 use crate::experiments::LoopRun;
-use crate::table::{write_atomic, write_text_atomic};
-
-fn io(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
-    move |e| format!("writing {}: {e}", path.display())
-}
+use crate::table::{write_atomic, write_text_atomic, writing};
 
 fn write_rows(path: &Path, names: &[String], rows: impl Iterator<Item = Vec<f64>>) -> Result<(), String> {
-    write_atomic(path, names, rows).map_err(io(path))
+    write_atomic(path, names, rows).map_err(writing(path))
 }
 
 fn write_run(path: &Path, run: &LoopRun, every: usize) -> Result<(), String> {
     let names: Vec<String> = run.columns.iter().map(|c| c.replace('.', "_")).collect();
-    write_atomic(path, &names, run.rows.iter().step_by(every.max(1)).cloned()).map_err(io(path))
+    write_atomic(path, &names, run.rows.iter().step_by(every.max(1)).cloned()).map_err(writing(path))
 }
 
 /// Writes the run into `out`: `data/` (friction pairs per arm and joint, gravity pairs, every
@@ -45,7 +41,7 @@ pub fn write_report(out: &Path, run: &PaperRun) -> Result<(), String> {
     figures::write_figures(out, run)?;
     let json = out.join("results.json");
     let text = serde_json::to_string_pretty(&run.results).map_err(|e| format!("results.json: {e}"))?;
-    write_text_atomic(&json, &text).map_err(io(&json))?;
+    write_text_atomic(&json, &text).map_err(writing(&json))?;
     let md = out.join("report.md");
-    write_text_atomic(&md, &markdown::report_markdown(run)).map_err(io(&md))
+    write_text_atomic(&md, &markdown::report_markdown(run)).map_err(writing(&md))
 }
