@@ -87,7 +87,7 @@ fn loop_step(c: &mut Criterion) {
     c.bench_function("closed_loop_1ms/master", |b| b.iter(|| sim.step().expect("step")));
 
     // The same loop without FMI; first checked to compute what the master does.
-    let mut plain = PlainLoop::new(nets.iter().map(|w| w.network().expect("net")).collect());
+    let mut plain = PlainLoop::new(nets.iter().map(|w| w.network().expect("net").mlp).collect());
     let mut check = System::from_spec(&spec, &dir)
         .expect("system")
         .initialize(0.0, STEP, spec.simulation.algorithm, &["arm.x".into(), "arm.y".into()])

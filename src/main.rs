@@ -16,7 +16,7 @@ use neurarm_models::{
 use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
-use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
+use neurarm_physics::nn::{train, InputEncoding, Signal, TrainSettings, WeightsFile};
 use std::io::IsTerminal;
 
 #[derive(Parser)]
@@ -90,10 +90,22 @@ enum Command {
         /// scaled by the arm's gravity load relative to the built-in arm).
         #[arg(long, value_delimiter = ',')]
         joint_gains: Option<Vec<f64>>,
-        /// Measure gravity at this many poses (10 to 20 000) drawn over the whole turn instead
-        /// of the paper's grid (7ⁿ up to 4 joints, coarser beyond).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(10..=20_000))]
+        /// Measure gravity at this many poses (10 to 20 000) drawn over the whole turn (default:
+        /// the paper's 7ⁿ grid up to 4 joints, 7⁴ = 2401 sampled poses beyond).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(10..=20_000), conflicts_with = "gravity_grid")]
         gravity_poses: Option<u64>,
+        /// Measure gravity on a kⁿ grid, k points per joint (at most 20 000 poses in all).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(2..=100))]
+        gravity_grid: Option<u64>,
+        /// How the gravity net sees the angles: link-angles (default: (cos, sin) of each link's
+        /// angle q₁+…+qⱼ, periodic), joint-angles ((cos, sin) of each joint angle, periodic) or
+        /// raw (the paper's net, not periodic; a periodic net's run also trains it for comparison).
+        #[arg(long, value_parser = parse_encoding)]
+        gravity_inputs: Option<InputEncoding>,
+        /// Average the gravity passes as measured (the paper's procedure) instead of first
+        /// taking the identified friction out of each.
+        #[arg(long)]
+        gravity_plain_average: bool,
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig,
@@ -132,6 +144,11 @@ enum Command {
         /// Train/validation/test fractions, comma-separated.
         #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [0.70, 0.15, 0.15])]
         split: Vec<f64>,
+        /// How the net sees the inputs: raw, joint-angles ((cos, sin) of each input angle
+        /// [rad]) or link-angles ((cos, sin) of the running sums q₁+…+qⱼ); the angle forms are
+        /// 2π-periodic in every input.
+        #[arg(long, value_parser = parse_encoding, default_value = "raw")]
+        encoding: InputEncoding,
         /// Output weights file (JSON).
         #[arg(long, short = 'o')]
         output: PathBuf,
@@ -315,7 +332,22 @@ fn run(cli: Cli) -> Result<()> {
                 Some(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", outcome.rows.len(), output.display()),
             }
         }
-        Command::Paper { config, real, output, quick, threads, seed, centre, scale, tracking_gains, joint_gains, gravity_poses } => {
+        Command::Paper {
+            config,
+            real,
+            output,
+            quick,
+            threads,
+            seed,
+            centre,
+            scale,
+            tracking_gains,
+            joint_gains,
+            gravity_poses,
+            gravity_grid,
+            gravity_inputs,
+            gravity_plain_average,
+        } => {
             use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
             let mut settings = if quick { Settings::quick() } else { Settings::paper() };
             if let Some(s) = seed {
@@ -330,8 +362,15 @@ fn run(cli: Cli) -> Result<()> {
                 settings.tracking_gains.kd = kd;
             }
             if let Some(poses) = gravity_poses {
-                settings.gravity_design = GravityDesign::Sampled { poses: poses as usize };
+                settings.gravity_design = Some(GravityDesign::Sampled { poses: poses as usize });
             }
+            if let Some(per_joint) = gravity_grid {
+                settings.gravity_design = Some(GravityDesign::Grid { per_joint: per_joint as usize });
+            }
+            if let Some(encoding) = gravity_inputs {
+                settings.gravity_encoding = encoding;
+            }
+            settings.gravity_friction_correction = !gravity_plain_average;
             if let Some(g) = joint_gains {
                 (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", &g)?;
                 settings.scale_joint_gains = false;
@@ -377,10 +416,10 @@ fn run(cli: Cli) -> Result<()> {
             eprintln!("wrote {} rows to {}", input.time.len(), output.display());
         }
         Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
-        Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, output } => {
+        Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, encoding, output } => {
             let settings =
                 TrainSettings { hidden, restarts, seed, epochs, max_fail, split: [split[0], split[1], split[2]], ..Default::default() };
-            let weights = train_from_csv(&data, &inputs, &targets, settings)?;
+            let weights = train_from_csv(&data, &inputs, &targets, encoding, settings)?;
             write_text_atomic(&output, &weights.to_json()).with_context(|| format!("writing {}", output.display()))?;
             let r = &weights.report;
             let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
@@ -542,14 +581,20 @@ fn unit_of(name: &str) -> String {
 }
 
 /// Reads the pairs, trains with a progress bar on a terminal, and wraps the result.
-fn train_from_csv(data: &std::path::Path, inputs: &[String], targets: &[String], settings: TrainSettings) -> Result<WeightsFile> {
+fn train_from_csv(
+    data: &std::path::Path,
+    inputs: &[String],
+    targets: &[String],
+    encoding: InputEncoding,
+    settings: TrainSettings,
+) -> Result<WeightsFile> {
     let required: Vec<&str> = inputs.iter().chain(targets).map(String::as_str).collect();
     let table = NumericTable::read(data, &required)?;
     let matrix = |names: &[String]| {
         let cols: Vec<&[f64]> = names.iter().map(|n| table.column(n).expect("required")).collect();
         DMatrix::from_fn(names.len(), table.rows(), |r, c| cols[r][c])
     };
-    let (x, t) = (matrix(inputs), matrix(targets));
+    let (x, t) = (encoding.encode_all(&matrix(inputs)), matrix(targets));
     let bar = if std::io::stderr().is_terminal() {
         ProgressBar::new((settings.epochs * settings.restarts) as u64)
     } else {
@@ -563,7 +608,12 @@ fn train_from_csv(data: &std::path::Path, inputs: &[String], targets: &[String],
     })?;
     bar.finish_and_clear();
     let signals = |names: &[String]| names.iter().map(|n| Signal { name: n.clone(), unit: unit_of(n) }).collect();
-    Ok(WeightsFile::new(&trained.net, signals(inputs), signals(targets), settings, trained.report))
+    Ok(WeightsFile::new(&trained.net, signals(inputs), signals(targets), settings, trained.report).with_encoding(encoding))
+}
+
+/// Parses an input encoding for clap.
+fn parse_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
+    InputEncoding::parse(text)
 }
 
 fn main() -> ExitCode {

@@ -378,19 +378,47 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
 /// interpolant [N·m]: how a net behaves between the pairs, the stick band included.
 pub fn interpolant_rms(net: &neurarm_physics::nn::Mlp, pairs: &[FrictionPair]) -> f64 {
     let (Some(first), Some(last)) = (pairs.first(), pairs.last()) else { return f64::INFINITY };
+    let curve = FrictionCurve::new(pairs);
     let steps = ((last.0 - first.0) / 1e-3).floor() as usize;
-    let (mut sq, mut k) = (0.0, 0usize);
+    let mut sq = 0.0;
     for i in 0..=steps {
         let v = first.0 + i as f64 * 1e-3;
-        while k + 2 < pairs.len() && pairs[k + 1].0 < v {
-            k += 1;
-        }
-        let (a, b) = (pairs[k], pairs[(k + 1).min(pairs.len() - 1)]);
-        let w = if b.0 > a.0 { ((v - a.0) / (b.0 - a.0)).clamp(0.0, 1.0) } else { 0.0 };
-        let interpolated = a.1 + w * (b.1 - a.1);
-        sq += (net.evaluate(&[v])[0] - interpolated).powi(2);
+        sq += (net.evaluate(&[v])[0] - curve.torque(v)).powi(2);
     }
     (sq / (steps + 1) as f64).sqrt()
+}
+
+/// A joint's identified friction as the piecewise-linear interpolant of its pairs: what the
+/// friction experiment measured, without a net's fitting error.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrictionCurve {
+    /// (velocity [rad/s], torque [N·m]) in increasing velocity.
+    points: Vec<(f64, f64)>,
+}
+
+impl FrictionCurve {
+    /// The curve through `pairs` (sorted by velocity, as the binned pairs are).
+    pub fn new(pairs: &[FrictionPair]) -> Self {
+        let mut points: Vec<(f64, f64)> = pairs.iter().map(|p| (p.0, p.1)).collect();
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Self { points }
+    }
+
+    /// The friction torque at `velocity` [rad/s]: interpolated between the neighbouring
+    /// pairs, the end pairs' values beyond them [N·m]; 0 without pairs.
+    pub fn torque(&self, velocity: f64) -> f64 {
+        let p = &self.points;
+        match p.len() {
+            0 => 0.0,
+            1 => p[0].1,
+            len => {
+                let j = p.partition_point(|q| q.0 < velocity).clamp(1, len - 1);
+                let (a, b) = (p[j - 1], p[j]);
+                let w = if b.0 > a.0 { ((velocity - a.0) / (b.0 - a.0)).clamp(0.0, 1.0) } else { 0.0 };
+                a.1 + w * (b.1 - a.1)
+            }
+        }
+    }
 }
 
 /// How well a friction net matches a known friction law over |q̇| from `min_speed` to

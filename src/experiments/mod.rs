@@ -30,7 +30,7 @@ pub use gravity::{
     gravity_grid, gravity_net_errors, gravity_sweep, sampled_poses, train_gravity_net, GravityPair, GRAVITY_SWEEP_SPEED_RAD_S,
 };
 pub use joint_space::{gravity_compensation_system, joint_rms_errors, joint_settled_errors};
-pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_JOINTS, MIN_JOINTS};
+pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_GRAVITY_POSES, MAX_JOINTS, MIN_JOINTS};
 pub use tracking::{tracking_errors, tracking_mse, tracking_start, tracking_system, TrackingErrors, TRACKING_SEED_POSE};
 
 /// RK4 sub-step of the arm in the identification runs [s]: one per 1 ms communication step.
@@ -371,14 +371,21 @@ mod tests {
     use neurarm_physics::control::ReferencePlacement;
 
     #[test]
-    fn arms_of_more_than_four_joints_get_a_coarser_grid_of_at_most_the_four_joint_size() {
+    fn arms_of_more_than_four_joints_get_as_many_sampled_poses_as_the_four_joint_grid() {
         let paper = Settings::paper();
-        let sizes: Vec<usize> = (2..=8).map(|n| paper.grid_for(n)).collect();
-        assert_eq!(sizes, [7, 7, 7, 4, 3, 3, 3]);
-        for n in 5..=7 {
-            assert!(paper.grid_for(n).pow(n as u32) <= 7usize.pow(4));
+        for n in 2..=4 {
+            assert_eq!(paper.design_for(n), GravityDesign::Grid { per_joint: 7 });
         }
-        assert_eq!(Settings::quick().grid_for(6), 3);
+        for n in 5..=8 {
+            assert_eq!(paper.design_for(n), GravityDesign::Sampled { poses: 2401 });
+        }
+        assert_eq!(Settings::quick().design_for(6), GravityDesign::Sampled { poses: 81 });
+        let given = Settings { gravity_design: Some(GravityDesign::Grid { per_joint: 3 }), ..Settings::paper() };
+        assert_eq!(given.design_for(6), GravityDesign::Grid { per_joint: 3 });
+        assert!(GravityDesign::Grid { per_joint: 7 }.check(6).unwrap_err().contains("117649 poses"));
+        assert!(GravityDesign::Grid { per_joint: 1 }.check(3).is_err());
+        assert!(GravityDesign::Sampled { poses: 9 }.check(3).is_err());
+        assert!(GravityDesign::Sampled { poses: 3000 }.check(6).is_ok());
     }
 
     #[test]

@@ -7,11 +7,12 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
+use super::friction::FrictionCurve;
 use super::friction::{friction_net_error, hold_gains, pair_error, FrictionNetError};
 use super::gravity::{gravity_pair_error, GravityNetErrors};
 use super::*;
 use crate::table::{write_text_atomic, writing};
-use neurarm_physics::nn::WeightsFile;
+use neurarm_physics::nn::{InputEncoding, WeightsFile};
 
 /// The paper's Table 1 [m²]: sim perfect, sim NN, sim none, real NN, real none.
 pub const PAPER_TABLE_1: [f64; 5] = [0.0014, 0.0016, 0.0248, 0.0071, 0.0291];
@@ -127,20 +128,29 @@ pub struct FrictionJoint {
 pub struct GravityResults {
     /// The design of the poses.
     pub design: GravityDesign,
-    /// Grid points per joint (of the grid design).
-    pub grid_per_joint: usize,
-    /// Whether the grid is coarser than `Settings::grid` because of the joint count.
-    pub coarse_grid: bool,
+    /// Whether the design is the default for the joint count (not given by the user).
+    pub default_design: bool,
     /// Poses measured.
     pub pairs: usize,
-    /// Largest |averaged torque − true gravity at the averaged angles| [N·m].
+    /// Whether each pass had the identified friction taken out before averaging.
+    pub friction_correction: bool,
+    /// Largest |averaged torque − true gravity at the averaged angles| of the pairs trained
+    /// on [N·m].
     pub pair_error_nm: f64,
+    /// The same for the plain average of the passes (the paper's procedure) [N·m].
+    pub pair_error_uncorrected_nm: f64,
     /// Hidden neurons of the net.
     pub hidden: usize,
-    /// The net against the true gravity on random poses.
+    /// How the compensator's gravity net sees the angles.
+    pub encoding: InputEncoding,
+    /// The compensator's net against the true gravity on random poses.
     pub net: GravityNetErrors,
-    /// RMS error per joint over the trained span as a share of the largest gravity torque of
-    /// any joint (the paper's reading; see `net` for each joint's own share and the whole turn).
+    /// The paper's raw-angle net trained on the same pairs, for comparison (when the
+    /// compensator's net is a periodic one).
+    pub raw_net: Option<GravityNetErrors>,
+    /// RMS error per joint as a share of the largest gravity torque of any joint (the paper's
+    /// reading), over the trained span for a raw net and the whole turn for a periodic one;
+    /// see `net` for each joint's own share.
     pub net_error_share: Vec<f64>,
 }
 
@@ -235,6 +245,7 @@ fn bar(len: u64, what: &str) -> ProgressBar {
 /// folder that looks finished (and an earlier run in `out` untouched). `out` must be absent,
 /// empty, or an earlier run's folder (it has a `results.json`).
 pub fn run_paper(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&str)) -> Result<PaperRun, String> {
+    settings.design_for(arms.joints()).check(arms.joints())?;
     if out.exists() {
         let empty = std::fs::read_dir(out).map_err(|e| format!("{}: {e}", out.display()))?.next().is_none();
         if !empty && !out.join("results.json").is_file() {
@@ -365,49 +376,83 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     lap("training friction nets", log);
 
     // Gravity identification: the grid split between the workers.
-    let grid_per_joint = settings.grid_for(n);
-    let (grid, span) = match settings.gravity_design {
-        GravityDesign::Grid => (gravity_grid(grid_per_joint, n), 2.0 * PI * (grid_per_joint as f64 - 1.0) / grid_per_joint as f64),
+    let design = settings.design_for(n);
+    let (grid, span) = match design {
+        GravityDesign::Grid { per_joint } => (gravity_grid(per_joint, n), 2.0 * PI * (per_joint as f64 - 1.0) / per_joint as f64),
         GravityDesign::Sampled { poses } => (sampled_poses(poses, n, settings.seed + 17), 2.0 * PI),
     };
     let chunk = grid.len().div_ceil(settings.threads.max(1));
     let chunks: Vec<Vec<Vec<f64>>> = grid.chunks(chunk).map(|c| c.to_vec()).collect();
     let b = bar(chunks.len() as u64, "gravity identification");
+    let curves: Vec<FrictionCurve> = friction_pairs[0].iter().map(|p| FrictionCurve::new(p)).collect();
+    let correction = settings.gravity_friction_correction.then_some(curves.as_slice());
     let swept = parallel(
         chunks,
         settings.threads,
         |points| {
-            gravity_sweep(&fmus.arm, &fmus.joint_controller, model, &points, settings).map_err(|e| format!("gravity identification: {e}"))
+            gravity_sweep(&fmus.arm, &fmus.joint_controller, model, &points, correction, settings)
+                .map_err(|e| format!("gravity identification: {e}"))
         },
         || b.inc(1),
     )?;
     b.finish_and_clear();
-    let mut gravity_pairs: Vec<GravityPair> = swept.into_iter().flat_map(|(p, _)| p).collect();
-    if let GravityDesign::Sampled { .. } = settings.gravity_design {
+    let mut gravity_pairs: Vec<GravityPair> = Vec::new();
+    let mut uncorrected: Vec<GravityPair> = Vec::new();
+    for sweep in swept {
+        gravity_pairs.extend(sweep.pairs);
+        uncorrected.extend(sweep.pairs_uncorrected);
+    }
+    if let GravityDesign::Sampled { .. } = design {
         // The sampled path shifts poses by whole turns; gravity is 2π-periodic in each angle.
-        for (q, _) in gravity_pairs.iter_mut() {
+        for (q, _) in gravity_pairs.iter_mut().chain(uncorrected.iter_mut()) {
             q.iter_mut().for_each(|a| *a = a.rem_euclid(2.0 * PI));
         }
     }
     lap("gravity identification", log);
-    let b = bar(settings.gravity_epochs as u64, &format!("gravity net ({n}-{}-{n})", settings.gravity_hidden));
-    let gravity_net = train_gravity_net(&gravity_pairs, settings, &mut |e| b.set_position(e as u64))?;
+    // The compensator's net and, beside a periodic one, the paper's raw-angle net on the same
+    // pairs, trained in parallel.
+    let mut encodings = vec![settings.gravity_encoding];
+    if settings.gravity_encoding != InputEncoding::Raw {
+        encodings.push(InputEncoding::Raw);
+    }
+    let b =
+        bar((settings.gravity_epochs * encodings.len()) as u64, &format!("gravity nets ({n} angles, {} hidden)", settings.gravity_hidden));
+    let mut nets = parallel(
+        encodings.clone(),
+        settings.threads,
+        |encoding| train_gravity_net(&gravity_pairs, encoding, settings, &mut |_| b.inc(1)),
+        || {},
+    )?;
     b.finish_and_clear();
+    let raw_net = (nets.len() > 1).then(|| nets.remove(1));
+    let gravity_net = nets.remove(0);
     let gravity_path = net_dir.join("gravity.json");
     write_text_atomic(&gravity_path, &gravity_net.to_json()).map_err(writing(&gravity_path))?;
     let net_errors = gravity_net_errors(&gravity_net, model, span, settings)?;
+    let raw_errors = match &raw_net {
+        Some(raw) => {
+            let path = net_dir.join("gravity_raw.json");
+            write_text_atomic(&path, &raw.to_json()).map_err(writing(&path))?;
+            Some(gravity_net_errors(raw, model, span, settings)?)
+        }
+        None => None,
+    };
     let gravity = GravityResults {
-        design: settings.gravity_design,
-        grid_per_joint,
-        coarse_grid: settings.gravity_design == GravityDesign::Grid && grid_per_joint < settings.grid,
+        design,
+        default_design: settings.gravity_design.is_none(),
         pairs: gravity_pairs.len(),
+        friction_correction: settings.gravity_friction_correction,
         pair_error_nm: gravity_pair_error(&gravity_pairs, model),
+        pair_error_uncorrected_nm: gravity_pair_error(&uncorrected, model),
         hidden: settings.gravity_hidden,
+        encoding: settings.gravity_encoding,
         net_error_share: {
-            let largest = net_errors.span.largest_torque_nm.iter().copied().fold(0.0, f64::max);
-            net_errors.span.rms_nm.iter().map(|e| e / largest).collect()
+            let region = net_errors.span.as_ref().unwrap_or(&net_errors.whole_turn);
+            let largest = region.largest_torque_nm.iter().copied().fold(0.0, f64::max);
+            region.rms_nm.iter().map(|e| e / largest).collect()
         },
         net: net_errors,
+        raw_net: raw_errors,
     };
     lap("training gravity net", log);
 

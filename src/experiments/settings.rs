@@ -9,6 +9,7 @@ use super::{tracking_start, FrictionHold};
 use neurarm_physics::arm::FrictionBranch;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
+use neurarm_physics::nn::InputEncoding;
 
 /// Fewest joints the experiments take: the task-space loop tracks a planar position.
 pub const MIN_JOINTS: usize = 2;
@@ -21,11 +22,18 @@ pub const MAX_JOINTS: usize = 8;
 pub struct Settings {
     /// Communication step [s].
     pub step: f64,
-    /// Gravity grid points per joint for arms of up to 4 joints (the paper: 7); more joints get
-    /// a coarser grid, see [`Settings::grid_for`].
+    /// Gravity grid points per joint of the default design (the paper: 7); see
+    /// [`Settings::design_for`].
     pub grid: usize,
-    /// Poses of the gravity identification: the paper's grid, or sampled.
-    pub gravity_design: GravityDesign,
+    /// Poses of the gravity identification: a grid or a sampled design; none for the default
+    /// of the joint count ([`Settings::design_for`]).
+    pub gravity_design: Option<GravityDesign>,
+    /// How the gravity net sees the angles: periodic link angles by default; `Raw` is the
+    /// paper's net (then also trained beside a periodic one for the report).
+    pub gravity_encoding: InputEncoding,
+    /// Take the identified friction out of each gravity pass before averaging (keeps friction
+    /// that differs with the direction out of the pairs); false is the paper's plain average.
+    pub gravity_friction_correction: bool,
     /// Largest joint speed of the friction experiment [rad/s] (the paper: 5).
     pub max_velocity: f64,
     /// Wanted spacing of the steady velocities of successive torque levels [rad/s].
@@ -66,7 +74,9 @@ impl Settings {
         Self {
             step: 1e-3,
             grid: 7,
-            gravity_design: GravityDesign::Grid,
+            gravity_design: None,
+            gravity_encoding: InputEncoding::LinkAngles,
+            gravity_friction_correction: true,
             max_velocity: 5.0,
             velocity_spacing: 0.1,
             bin_width: 0.05,
@@ -98,36 +108,72 @@ impl Settings {
         }
     }
 
-    /// Gravity grid points per joint for an arm of `joints` joints: `grid` up to 4 joints;
-    /// beyond, the largest k with kⁿ ≤ grid⁴ (the 4-joint grid's size), but at least 3, so a
-    /// 6-joint arm gets 3⁶ = 729 poses instead of 7⁶ = 117 649. A full grid is what the paper
-    /// did; it does not scale, and the report says when the grid is coarser.
-    pub fn grid_for(&self, joints: usize) -> usize {
-        if joints <= 4 {
-            return self.grid;
+    /// The gravity design for an arm of `joints` joints: the one given, else the paper's
+    /// `grid`ⁿ grid up to 4 joints and, beyond, `grid`⁴ poses sampled over the whole turn (the
+    /// 4-joint grid's count): a 7ⁿ grid is 117 649 poses for 6 joints.
+    pub fn design_for(&self, joints: usize) -> GravityDesign {
+        match self.gravity_design {
+            Some(design) => design,
+            None if joints <= 4 => GravityDesign::Grid { per_joint: self.grid },
+            None => GravityDesign::Sampled { poses: self.grid.pow(4) },
         }
-        let budget = self.grid.pow(4);
-        let mut k = 3;
-        while (k + 1usize).pow(joints as u32) <= budget {
-            k += 1;
-        }
-        k.min(self.grid)
     }
 }
 
 /// The poses the gravity identification measures.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum GravityDesign {
-    /// The paper's kⁿ grid over [0, 2π(k−1)/k) ([`Settings::grid_for`]).
-    #[default]
-    Grid,
+    /// The paper's kⁿ grid: k points per joint, 0, 2π/k, …, 2π(k−1)/k.
+    Grid {
+        /// Points per joint, k.
+        per_joint: usize,
+    },
     /// `poses` poses drawn uniformly over the whole turn [0, 2π)ⁿ (seeded), visited in a
     /// nearest-neighbour order (see `gravity::sampled_poses`).
     Sampled {
         /// Number of poses.
         poses: usize,
     },
+}
+
+impl Default for GravityDesign {
+    /// The paper's 7ⁿ grid.
+    fn default() -> Self {
+        GravityDesign::Grid { per_joint: 7 }
+    }
+}
+
+/// Most poses a gravity design may have (the sampled path's ordering is quadratic in them).
+pub const MAX_GRAVITY_POSES: usize = 20_000;
+
+impl GravityDesign {
+    /// Number of poses for an arm of `joints` joints (saturating).
+    pub fn poses(&self, joints: usize) -> usize {
+        match *self {
+            GravityDesign::Grid { per_joint } => per_joint.saturating_pow(joints as u32),
+            GravityDesign::Sampled { poses } => poses,
+        }
+    }
+
+    /// Refuses a design of fewer than 2 points per joint or 10 poses, or more than
+    /// [`MAX_GRAVITY_POSES`] poses, naming the option to change.
+    pub fn check(&self, joints: usize) -> Result<(), String> {
+        match *self {
+            GravityDesign::Grid { per_joint } if per_joint < 2 => {
+                Err(format!("a gravity grid of {per_joint} point per joint: use at least 2 (--gravity-grid)"))
+            }
+            GravityDesign::Grid { per_joint } if self.poses(joints) > MAX_GRAVITY_POSES => Err(format!(
+                "a {per_joint}ⁿ gravity grid is {} poses for {joints} joints, more than {MAX_GRAVITY_POSES}: take a coarser grid \
+                 (--gravity-grid) or sampled poses (--gravity-poses)",
+                self.poses(joints)
+            )),
+            GravityDesign::Sampled { poses } if !(10..=MAX_GRAVITY_POSES).contains(&poses) => {
+                Err(format!("{poses} gravity poses: use 10 to {MAX_GRAVITY_POSES} (--gravity-poses)"))
+            }
+            _ => Ok(()),
+        }
+    }
 }
 
 /// Where the run's "real" arm comes from.

@@ -4,8 +4,10 @@ use std::f64::consts::PI;
 use std::fmt::Write as _;
 
 use super::figures::real_label;
+use crate::experiments::gravity::RegionErrors;
 use crate::experiments::paper::{Cases, PaperRun};
 use crate::experiments::{GravityDesign, RealOrigin, GRAVITY_SWEEP_SPEED_RAD_S};
+use neurarm_physics::nn::InputEncoding;
 
 fn row(cells: &[String]) -> String {
     format!("| {} |", cells.join(" | "))
@@ -64,7 +66,10 @@ pub fn report_markdown(run: &PaperRun) -> String {
         100.0 * worst_friction.0,
         worst_friction.1,
         100.0 * worst_gravity,
-        if r.gravity.coarse_grid { format!(" (on a coarser {}ⁿ grid, see below)", r.gravity.grid_per_joint) } else { String::new() },
+        match r.gravity.design {
+            GravityDesign::Sampled { poses } => format!(" (from {poses} sampled poses)"),
+            GravityDesign::Grid { per_joint } => format!(" (from a {per_joint}ⁿ grid)"),
+        },
         settled(1),
         settled(0),
         settled(2),
@@ -221,42 +226,75 @@ pub fn report_markdown(run: &PaperRun) -> String {
 
     let g = &r.gravity;
     let _ = writeln!(s, "\n## Gravity identification\n");
-    let grid_note = if g.coarse_grid {
+    let grid_note = if g.default_design && n > 4 {
         format!(
-            " This grid is coarser than the paper's {0}ⁿ: a full {0}ⁿ grid is {1} poses for {n} joints, so arms of more than 4 joints \
-             get the largest k with kⁿ ≤ {0}⁴ (at least 3).",
+            " For more than 4 joints the default is sampled poses, as many as the {0}⁴ grid of 4 joints: a full {0}ⁿ grid is {1} \
+             poses for {n} joints (`--gravity-grid` gives one).",
             settings.grid,
-            settings.grid.pow(n as u32)
+            settings.grid.saturating_pow(n as u32)
         )
     } else {
         String::new()
     };
     let poses = match g.design {
-        GravityDesign::Grid => format!("a {}ⁿ grid = {} configurations", g.grid_per_joint, g.pairs),
+        GravityDesign::Grid { per_joint } => format!("a {per_joint}ⁿ grid = {} configurations", g.pairs),
         GravityDesign::Sampled { poses } => format!(
-            "{poses} configurations drawn uniformly over the whole turn [0, 2π)ⁿ (`--gravity-poses`), visited in a nearest-neighbour \
-             order (see `sampled_poses`)"
+            "{poses} configurations drawn uniformly over the whole turn [0, 2π)ⁿ (seeded), visited in a nearest-neighbour order \
+             (see `sampled_poses`)"
         ),
+    };
+    let correction = if g.friction_correction {
+        "each pass's torque had the identified friction (the simulated arm's friction pairs, interpolated at the measured \
+         speeds) and the Coriolis and centrifugal torques of the nominal model taken out, and the two passes were averaged"
+    } else {
+        "the torques of the two passes were averaged as measured (the paper's procedure)"
     };
     let _ = writeln!(
         s,
-        "Base turned 90°; {poses}, each passed slowly up and down by all joints ({} rad/s), torques of the two \
-         passes averaged; the joints held on the moves by an inertia-scaled PD from the gravity-free rigid-body model (see \
-         `gravity_sweep`). A {n}-{}-{n} net trained on them (`nets/gravity.json`).{grid_note}\n",
-        GRAVITY_SWEEP_SPEED_RAD_S, g.hidden
+        "Base turned 90°; {poses}, each passed slowly up and down by all joints ({} rad/s); {correction}. The joints are held on \
+         the moves by an inertia-scaled PD from the gravity-free rigid-body model (see `gravity_sweep`).{grid_note}\n",
+        GRAVITY_SWEEP_SPEED_RAD_S
     );
+    let procedure = if g.friction_correction {
+        format!(
+            "{:.2e} N·m with the friction taken out and {:.2e} N·m for the plain average of the passes, which keeps half the \
+             difference of the two directions' friction",
+            g.pair_error_nm, g.pair_error_uncorrected_nm
+        )
+    } else {
+        format!("{:.2e} N·m", g.pair_error_nm)
+    };
     let _ = writeln!(
         s,
-        "The procedure itself, checked against the true model: the largest difference between an averaged torque and the true \
-         gravity torque at the averaged angles is {:.2e} N·m (what remains of friction, Coriolis terms and lag).\n",
-        g.pair_error_nm
+        "The procedure itself, checked against the true model: the largest difference between a pair's torque and the true \
+         gravity torque at its angles is {procedure}.\n"
     );
-    let largest_any = g.net.span.largest_torque_nm.iter().copied().fold(0.0, f64::max);
+    let features = g.net.encoding.features(n);
+    let seen = match g.encoding {
+        InputEncoding::LinkAngles => {
+            "each link angle φⱼ = q₁ + … + qⱼ as (cos φⱼ, sin φⱼ), which the kinematics give: the net is \
+             periodic in every angle and has to learn the masses, centres of mass and the base's tilt (a rigid planar arm's \
+             gravity torques are a linear map of these inputs)"
+        }
+        InputEncoding::JointAngles => "each joint angle as (cos qᵢ, sin qᵢ): the net is periodic in every angle",
+        InputEncoding::Raw => "the raw angles, as in the paper: the net is not periodic",
+    };
     let _ = writeln!(
         s,
-        "Error on {} random poses (not grid points) in two regions: within the grid's span [0, 2π(k−1)/k)ⁿ, the paper's reading, \
-         and over the whole turn [0, 2π)ⁿ with each angle wrapped into the trained turn as the `NnCompensator` FMU does, which is \
-         what a user of the compensator gets (the net is not periodic, and the grid never covers the last 1/k of the turn). \
+        "The compensator's net (`nets/gravity.json`, {features}-{}-{n}) sees {seen}.{}\n",
+        g.hidden,
+        if g.raw_net.is_some() {
+            format!(" Beside it, the paper's raw-angle {n}-{}-{n} net trained on the same pairs (`nets/gravity_raw.json`).", g.hidden)
+        } else {
+            String::new()
+        }
+    );
+    let largest_any = g.net.whole_turn.largest_torque_nm.iter().copied().fold(0.0, f64::max);
+    let _ = writeln!(
+        s,
+        "Error on {} random poses (not training poses) over the whole turn [0, 2π)ⁿ, each angle wrapped into a raw net's trained \
+         turn as the `NnCompensator` FMU does, which is what a user of the compensator gets; for a raw net also within the \
+         trained span (for the grid [0, 2π(k−1)/k)ⁿ, the paper's reading: the grid never covers the last 1/k of the turn). \
          Shares are of each joint's own largest gravity torque; the paper's reading divides every joint by the largest of all \
          ({largest_any:.2} N·m). `gravity.png` shows each whole-turn pose's error against its true torque:\n",
         g.net.poses
@@ -267,13 +305,26 @@ pub fn report_markdown(run: &PaperRun) -> String {
     };
     let nm = |v: f64| format!("{v:.4}");
     let pct = |v: f64| format!("{:.2} %", 100.0 * v);
-    for (region, e) in [("span", &g.net.span), ("whole turn", &g.net.whole_turn)] {
+    let mut regions: Vec<(String, &RegionErrors)> = Vec::new();
+    for (name, net) in std::iter::once(("net", &g.net)).chain(g.raw_net.as_ref().map(|r| ("paper's raw net", r))) {
+        let name = if g.raw_net.is_some() { format!("{name}, ") } else { String::new() };
+        regions.push((format!("{name}whole turn"), &net.whole_turn));
+        if let Some(span) = &net.span {
+            regions.push((format!("{name}span"), span));
+        }
+    }
+    for (region, e) in regions {
         let _ = writeln!(s, "{}", line(&format!("{region}: RMS [N·m]"), &e.rms_nm, &nm));
         let _ = writeln!(s, "{}", line(&format!("{region}: RMS, share of the joint's largest torque"), &e.rms_share, &pct));
         let _ = writeln!(s, "{}", line(&format!("{region}: largest error [N·m]"), &e.max_nm, &nm));
         let _ = writeln!(s, "{}", line(&format!("{region}: largest error, share"), &e.max_share, &pct));
     }
-    let _ = writeln!(s, "{}", line("span: RMS, share of the largest torque of all (the paper's reading)", &g.net_error_share, &pct));
+    let paper_region = if g.net.span.is_some() { "span" } else { "whole turn" };
+    let _ = writeln!(
+        s,
+        "{}",
+        line(&format!("net, {paper_region}: RMS, share of the largest torque of all (the paper's reading)"), &g.net_error_share, &pct)
+    );
 
     let j = &r.joint_loop;
     let _ = writeln!(s, "\n## Gravity compensation in the joint-space loop\n");

@@ -1,15 +1,16 @@
 //! The `NnCompensator` FMU: the paper's learned compensating torques as a block.
 //!
 //! Ports as every compensator ([`CompensatorPorts`]): joint i's friction part is joint i's
-//! friction net of `qd_i`; the gravity part is output i of the gravity net of all angles, each
-//! wrapped into the turn [min, min + 2π) of the net's training data, as gravity is
-//! 2π-periodic. A disabled part's outputs are 0. The block is static: outputs follow the
+//! friction net of `qd_i`; the gravity part is output i of the gravity net of all angles. A
+//! periodic gravity net (angles encoded on the circle) takes the angles as they come; a raw
+//! one (the paper's) gets each angle wrapped into the turn [min, min + 2π) of its training
+//! data, as gravity is 2π-periodic. A disabled part's outputs are 0. The block is static: outputs follow the
 //! inputs at once (direct feedthrough), steps change nothing.
 
 use std::path::Path;
 
 use fmi2_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
-use neurarm_physics::nn::{Mlp, WeightsFile};
+use neurarm_physics::nn::{EncodedNet, InputEncoding, WeightsFile};
 use serde::{Deserialize, Serialize};
 
 use crate::ports::{CompensatorPorts, Parts};
@@ -60,14 +61,15 @@ impl ModelKind for NnCompensatorSpec {
 pub struct NnCompensatorModel {
     description: ModelDescription,
     ports: CompensatorPorts,
-    friction: Vec<Mlp>,
-    gravity: Option<Mlp>,
+    friction: Vec<EncodedNet>,
+    gravity: Option<EncodedNet>,
+    features: Vec<f64>,
     hidden: Vec<f64>,
     x: Vec<f64>,
     y: Vec<f64>,
 }
 
-fn check_signals(file: &WeightsFile, what: &str, n_in: usize, n_out: usize) -> Result<Mlp, BuildError> {
+fn check_signals(file: &WeightsFile, what: &str, n_in: usize, n_out: usize) -> Result<EncodedNet, BuildError> {
     let net = file.network().map_err(|e| BuildError::Spec(format!("{what}: {e}")))?;
     if net.inputs() != n_in || net.outputs() != n_out {
         return Err(BuildError::Spec(format!(
@@ -101,10 +103,19 @@ impl NnCompensatorModel {
         if !friction.is_empty() && friction.len() != joints {
             return Err(BuildError::Spec(format!("{} friction nets for {joints} joints: give one per joint", friction.len())));
         }
-        let friction: Vec<Mlp> = friction
+        let friction: Vec<EncodedNet> = friction
             .iter()
             .enumerate()
-            .map(|(i, f)| check_signals(f, &format!("friction net of joint {}", i + 1), 1, 1))
+            .map(|(i, f)| {
+                let what = format!("friction net of joint {}", i + 1);
+                if f.encoding != InputEncoding::Raw {
+                    return Err(BuildError::Spec(format!(
+                        "{what}: its input is encoded as '{}'; a friction net takes the velocity as it is",
+                        f.encoding.name()
+                    )));
+                }
+                check_signals(f, &what, 1, 1)
+            })
             .collect::<Result<_, _>>()?;
         let gravity = gravity.map(|g| check_signals(g, "gravity net", joints, joints)).transpose()?;
         let mut b = TableBuilder::new();
@@ -117,8 +128,10 @@ impl NnCompensatorModel {
         };
         let text = format!("NN compensator of {which} torques for {joints} joints (neurarm; weights crc32 {fingerprint:08x})");
         let description = describe(identifier, text, b.finish())?;
-        let widest = friction.iter().chain(&gravity).map(Mlp::hidden).max().unwrap_or(1);
-        Ok(Self { description, ports, friction, gravity, hidden: vec![0.0; widest], x: vec![0.0; joints], y: vec![0.0; joints] })
+        let widest = friction.iter().chain(&gravity).map(EncodedNet::hidden).max().unwrap_or(1);
+        let features = vec![0.0; gravity.as_ref().map_or(1, EncodedNet::features)];
+        let (x, y) = (vec![0.0; joints], vec![0.0; joints]);
+        Ok(Self { description, ports, friction, gravity, features, hidden: vec![0.0; widest], x, y })
     }
 }
 
@@ -133,14 +146,20 @@ impl StaticModel for NnCompensatorModel {
         let use_gravity = values[p.enable_gravity] && self.gravity.is_some();
         match (&self.gravity, use_gravity) {
             (Some(g), true) => {
-                // Gravity is 2π-periodic in every revolute angle: bring each angle into the
-                // turn the net was trained on, [min, min + 2π) of its training data, so angles
-                // outside that range are not extrapolated.
-                for i in 0..p.joints() {
-                    let low = g.input_scaling.min[i];
-                    self.x[i] = low + (values[p.q[i]] - low).rem_euclid(std::f64::consts::TAU);
+                if g.encoding.is_periodic() {
+                    for i in 0..p.joints() {
+                        self.x[i] = values[p.q[i]];
+                    }
+                } else {
+                    // Gravity is 2π-periodic in every revolute angle and a raw net is not:
+                    // bring each angle into the turn the net was trained on, [min, min + 2π)
+                    // of its training data, so angles outside that range are not extrapolated.
+                    for i in 0..p.joints() {
+                        let low = g.mlp.input_scaling.min[i];
+                        self.x[i] = low + (values[p.q[i]] - low).rem_euclid(std::f64::consts::TAU);
+                    }
                 }
-                g.evaluate_into(&self.x, &mut self.hidden[..g.hidden()], &mut self.y);
+                g.evaluate_into(&self.x, &mut self.features, &mut self.hidden[..g.hidden()], &mut self.y);
             }
             _ => self.y.fill(0.0),
         }
@@ -148,7 +167,7 @@ impl StaticModel for NnCompensatorModel {
             let friction = if use_friction {
                 let mut out = [0.0];
                 let h = self.friction[i].hidden();
-                self.friction[i].evaluate_into(&[values[p.qd[i]]], &mut self.hidden[..h], &mut out);
+                self.friction[i].mlp.evaluate_into(&[values[p.qd[i]]], &mut self.hidden[..h], &mut out);
                 out[0]
             } else {
                 0.0
@@ -162,8 +181,9 @@ impl StaticModel for NnCompensatorModel {
 /// The equations, for the FMU's `documentation/index.html`.
 pub const EQUATIONS_HTML: &str = "<p>Each net is <code>y = LW tanh(IW x̃ + b1) + b2</code> on inputs \
 scaled to [-1, 1] (mapminmax), with outputs scaled back to N·m. Per joint i:</p>\
-<p><code>tau_friction_i = f_i(qd_i)</code>, <code>tau_gravity = g(q_1, …, q_n)</code> with each angle first \
-brought into the turn the gravity net was trained on, [min_i, min_i + 2π) (gravity is 2π-periodic), \
+<p><code>tau_friction_i = f_i(qd_i)</code>, <code>tau_gravity = g(q_1, …, q_n)</code>. A periodic gravity net \
+sees each joint angle, or each link angle φ_j = q_1 + … + q_j, as (cos, sin) before scaling; a raw one \
+sees each angle first brought into the turn it was trained on, [min_i, min_i + 2π) (gravity is 2π-periodic); \
 <code>tau_comp_i = enable_friction·tau_friction_i + enable_gravity·tau_gravity_i</code>.</p>\
 <p>The block is static: its outputs follow its inputs without delay, and a step changes nothing. \
 The weights are read from <code>resources/</code> at instantiation; their CRC-32 is part of the \

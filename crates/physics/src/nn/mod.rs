@@ -2,10 +2,12 @@
 //! trainer, and the versioned weights file that carries a trained net with its names, units,
 //! scaling and training record.
 
+pub mod encoding;
 pub mod lm;
 pub mod mlp;
 pub mod weights;
 
+pub use encoding::{EncodedNet, InputEncoding};
 pub use lm::{train, EpochInfo, StopReason, TrainReport, TrainSettings, Trained};
 pub use mlp::{MinMaxScaling, Mlp};
 pub use weights::{Signal, WeightsError, WeightsFile};

@@ -5,13 +5,15 @@ use std::path::Path;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
+use super::encoding::{EncodedNet, InputEncoding};
 use super::lm::{TrainReport, TrainSettings};
 use super::mlp::{MinMaxScaling, Mlp};
 
 /// Value of `format` in every weights file.
 pub const FORMAT: &str = "neurarm-weights";
-/// The version this build writes and reads.
-pub const VERSION: u32 = 1;
+/// The version this build writes. Version 2 added `encoding`; version 1 files (raw inputs
+/// only) are still read.
+pub const VERSION: u32 = 2;
 
 /// A named input or output with its unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -33,9 +35,12 @@ pub struct WeightsFile {
     pub version: u32,
     /// The inputs, in order.
     pub inputs: Vec<Signal>,
+    /// How the inputs are encoded before the first layer (absent in version 1: raw).
+    #[serde(default)]
+    pub encoding: InputEncoding,
     /// The outputs, in order.
     pub outputs: Vec<Signal>,
-    /// Input weights, one row per hidden neuron.
+    /// Input weights, one row per hidden neuron and one value per encoded input.
     pub iw: Vec<Vec<f64>>,
     /// Hidden biases.
     pub b1: Vec<f64>,
@@ -43,7 +48,7 @@ pub struct WeightsFile {
     pub lw: Vec<Vec<f64>>,
     /// Output biases.
     pub b2: Vec<f64>,
-    /// Input scaling (mapminmax).
+    /// Input scaling (mapminmax) of the encoded inputs.
     pub input_scaling: MinMaxScaling,
     /// Output scaling (mapminmax).
     pub output_scaling: MinMaxScaling,
@@ -75,13 +80,15 @@ pub enum WeightsError {
 }
 
 impl WeightsFile {
-    /// Wraps a trained net with its signal names and training record.
+    /// Wraps a trained net with its signal names and training record; the inputs are raw
+    /// (see [`WeightsFile::with_encoding`]).
     pub fn new(net: &Mlp, inputs: Vec<Signal>, outputs: Vec<Signal>, training: TrainSettings, report: TrainReport) -> Self {
         let rows = |m: &DMatrix<f64>| m.row_iter().map(|r| r.iter().copied().collect()).collect();
         Self {
             format: FORMAT.into(),
             version: VERSION,
             inputs,
+            encoding: InputEncoding::Raw,
             outputs,
             iw: rows(&net.iw),
             b1: net.b1.iter().copied().collect(),
@@ -94,17 +101,30 @@ impl WeightsFile {
         }
     }
 
-    /// Checks sizes, finiteness and version; returns the network.
-    pub fn network(&self) -> Result<Mlp, String> {
+    /// The same file for a net trained on inputs encoded by `encoding` (the net's first
+    /// layer then has [`InputEncoding::features`] inputs).
+    pub fn with_encoding(mut self, encoding: InputEncoding) -> Self {
+        self.encoding = encoding;
+        self
+    }
+
+    /// Checks sizes, finiteness and version; returns the network behind its encoding.
+    pub fn network(&self) -> Result<EncodedNet, String> {
         if self.format != FORMAT {
             return Err(format!("format is '{}', expected '{FORMAT}'", self.format));
         }
-        if self.version != VERSION {
-            return Err(format!("version {} is not supported (this build reads version {VERSION})", self.version));
+        if !(1..=VERSION).contains(&self.version) {
+            return Err(format!("version {} is not supported (this build reads versions 1 to {VERSION})", self.version));
         }
-        let (n, h, k) = (self.inputs.len(), self.b1.len(), self.outputs.len());
-        if n == 0 || h == 0 || k == 0 {
-            return Err(format!("empty network: {n} inputs, {h} hidden neurons, {k} outputs"));
+        if self.version == 1 && self.encoding != InputEncoding::Raw {
+            return Err(format!("a version 1 file has raw inputs only, not the '{}' encoding", self.encoding.name()));
+        }
+        if self.inputs.is_empty() {
+            return Err("empty network: 0 inputs".into());
+        }
+        let (n, h, k) = (self.encoding.features(self.inputs.len()), self.b1.len(), self.outputs.len());
+        if h == 0 || k == 0 {
+            return Err(format!("empty network: {h} hidden neurons, {k} outputs"));
         }
         let shape = |name: &str, rows: &Vec<Vec<f64>>, r: usize, c: usize| -> Result<(), String> {
             if rows.len() != r {
@@ -133,14 +153,15 @@ impl WeightsFile {
         if let Some(v) = all.chain(scalings).find(|v| !v.is_finite()) {
             return Err(format!("a weight or scaling value is {v}, not a finite number"));
         }
-        Ok(Mlp {
+        let mlp = Mlp {
             iw: DMatrix::from_fn(h, n, |j, i| self.iw[j][i]),
             b1: DVector::from_column_slice(&self.b1),
             lw: DMatrix::from_fn(k, h, |o, j| self.lw[o][j]),
             b2: DVector::from_column_slice(&self.b2),
             input_scaling: self.input_scaling.clone(),
             output_scaling: self.output_scaling.clone(),
-        })
+        };
+        Ok(EncodedNet { encoding: self.encoding, mlp })
     }
 
     /// Parses JSON text; `path` names the source in messages.

@@ -1,0 +1,151 @@
+//! How a net's physical inputs become the values its first layer sees, and the net together
+//! with that encoding.
+//!
+//! Gravity is 2π-periodic in every joint angle. The paper's net takes the raw angles and is
+//! right only on the span it was trained on; a net given each angle as a point on the circle
+//! (cos, sin) is periodic by construction, wherever it is evaluated.
+
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+use super::mlp::Mlp;
+
+/// The encoding of a net's inputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InputEncoding {
+    /// The inputs as they are (the paper's nets).
+    #[default]
+    Raw,
+    /// Each input angle qᵢ [rad] as (cos qᵢ, sin qᵢ): the net is 2π-periodic in every input.
+    JointAngles,
+    /// The link angles φⱼ = q₁ + … + qⱼ [rad] of a serial chain of revolute joints (each
+    /// link's direction relative to the base) as (cos φⱼ, sin φⱼ): periodic in every input.
+    /// These are built from the kinematics alone; for a planar arm the gravity torques are a
+    /// linear map of them, whose coefficients (masses, centres of mass, the base's tilt) the
+    /// net has to learn.
+    LinkAngles,
+}
+
+impl InputEncoding {
+    /// Every encoding, for listing in messages.
+    pub const ALL: [InputEncoding; 3] = [InputEncoding::Raw, InputEncoding::JointAngles, InputEncoding::LinkAngles];
+
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            InputEncoding::Raw => "raw",
+            InputEncoding::JointAngles => "joint_angles",
+            InputEncoding::LinkAngles => "link_angles",
+        }
+    }
+
+    /// Parses [`InputEncoding::name`] (a `-` may stand for `_`).
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let wanted = text.trim().replace('-', "_");
+        Self::ALL.into_iter().find(|e| e.name() == wanted).ok_or_else(|| {
+            let names: Vec<&str> = Self::ALL.iter().map(|e| e.name()).collect();
+            format!("unknown input encoding '{text}': use one of {}", names.join(", "))
+        })
+    }
+
+    /// True when the encoded net is 2π-periodic in every input.
+    pub fn is_periodic(self) -> bool {
+        self != InputEncoding::Raw
+    }
+
+    /// Number of values the first layer sees for `inputs` physical inputs.
+    pub fn features(self, inputs: usize) -> usize {
+        match self {
+            InputEncoding::Raw => inputs,
+            InputEncoding::JointAngles | InputEncoding::LinkAngles => 2 * inputs,
+        }
+    }
+
+    /// Encodes one sample `x` into `out` (length [`InputEncoding::features`]); for the
+    /// periodic forms `out` is (cos, sin) of each angle in turn. Allocates nothing.
+    #[inline]
+    pub fn encode_into(self, x: &[f64], out: &mut [f64]) {
+        match self {
+            InputEncoding::Raw => out.copy_from_slice(x),
+            InputEncoding::JointAngles => {
+                for (i, q) in x.iter().enumerate() {
+                    let (s, c) = q.sin_cos();
+                    out[2 * i] = c;
+                    out[2 * i + 1] = s;
+                }
+            }
+            InputEncoding::LinkAngles => {
+                // Each link's cosine and sine from the previous link's by the angle-sum
+                // formulas would drift with the joint count; summing the angles does not.
+                let mut phi = 0.0;
+                for (i, q) in x.iter().enumerate() {
+                    phi += q;
+                    let (s, c) = phi.sin_cos();
+                    out[2 * i] = c;
+                    out[2 * i + 1] = s;
+                }
+            }
+        }
+    }
+
+    /// Encodes every column of `x` (one row per input, one column per sample).
+    pub fn encode_all(self, x: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut out = DMatrix::zeros(self.features(x.nrows()), x.ncols());
+        let mut column = vec![0.0; x.nrows()];
+        let mut encoded = vec![0.0; out.nrows()];
+        for c in 0..x.ncols() {
+            column.iter_mut().zip(x.column(c).iter()).for_each(|(d, s)| *d = *s);
+            self.encode_into(&column, &mut encoded);
+            out.column_mut(c).iter_mut().zip(&encoded).for_each(|(d, s)| *d = *s);
+        }
+        out
+    }
+}
+
+/// A two-layer net behind its input encoding: what a weights file describes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EncodedNet {
+    /// How the physical inputs are encoded.
+    pub encoding: InputEncoding,
+    /// The net, on the encoded inputs.
+    pub mlp: Mlp,
+}
+
+impl EncodedNet {
+    /// Number of physical inputs.
+    pub fn inputs(&self) -> usize {
+        match self.encoding {
+            InputEncoding::Raw => self.mlp.inputs(),
+            InputEncoding::JointAngles | InputEncoding::LinkAngles => self.mlp.inputs() / 2,
+        }
+    }
+    /// Number of hidden neurons.
+    pub fn hidden(&self) -> usize {
+        self.mlp.hidden()
+    }
+    /// Number of outputs.
+    pub fn outputs(&self) -> usize {
+        self.mlp.outputs()
+    }
+    /// Number of encoded values the first layer sees.
+    pub fn features(&self) -> usize {
+        self.mlp.inputs()
+    }
+
+    /// Evaluates one sample (original units) into `out`, with `features` (length
+    /// [`EncodedNet::features`]) and `hidden` (length H) as scratch; allocates nothing.
+    pub fn evaluate_into(&self, x: &[f64], features: &mut [f64], hidden: &mut [f64], out: &mut [f64]) {
+        self.encoding.encode_into(x, features);
+        self.mlp.evaluate_into(features, hidden, out);
+    }
+
+    /// Evaluates one sample (original units).
+    pub fn evaluate(&self, x: &[f64]) -> Vec<f64> {
+        let mut features = vec![0.0; self.features()];
+        let mut hidden = vec![0.0; self.hidden()];
+        let mut out = vec![0.0; self.outputs()];
+        self.evaluate_into(x, &mut features, &mut hidden, &mut out);
+        out
+    }
+}
