@@ -319,6 +319,16 @@ fn paper_measures_gravity_at_sampled_poses_over_the_whole_turn() {
         // Poses over the whole turn, not only the grid's span [0, 2π·2/3).
         assert!(q.iter().any(|&a| a > 2.0 * std::f64::consts::PI * 5.0 / 6.0), "{name} reaches the last sixth of the turn");
     }
+    assert_eq!(json["gravity"]["encoding"].as_str(), Some("link_angles"));
     let e = neurarm().args(["paper", "--gravity-poses", "3", "-o"]).arg(dir.path().join("x")).assert().failure();
     assert!(String::from_utf8_lossy(&e.get_output().stderr).contains("--gravity-poses"));
+    // A design too large to measure is refused before anything runs, naming the way out.
+    let six = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/arms/arm6.toml");
+    let e = neurarm().args(["paper", "--gravity-grid", "7", "-c"]).arg(&six).arg("-o").arg(dir.path().join("y")).assert().failure();
+    let stderr = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
+    assert!(stderr.contains("117649 poses") && stderr.contains("--gravity-poses"), "{stderr}");
+    assert!(!dir.path().join("y").exists());
+    let e = neurarm().args(["paper", "--gravity-inputs", "polar", "-o"]).arg(dir.path().join("z")).assert().failure();
+    let stderr = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
+    assert!(stderr.contains("raw, joint_angles, link_angles"), "{stderr}");
 }

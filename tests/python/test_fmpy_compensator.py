@@ -1,6 +1,7 @@
 """The NnCompensator FMU under fmpy: it validates; for 1000 random (q, qd) its outputs equal the
 Rust forward pass (`neurarm eval`, angles wrapped into the gravity net's trained turn) to 1e-12; the enable switches change exactly their terms;
-missing or corrupt weights make instantiation fail with the reason logged."""
+missing or corrupt weights make instantiation fail with the reason logged. With a periodic gravity net (link angles as (cos, sin))
+the FMU equals a numpy forward pass written here from the weights file, unwrapped, and is 2π-periodic in every angle."""
 import json
 import pathlib
 import shutil
@@ -157,3 +158,61 @@ def test_bad_weights_make_instantiation_fail_with_reason(fmu, damage, reason):
         assert any(reason in m for m in slave.log), slave.log
     finally:
         shutil.rmtree(unzipped, ignore_errors=True)
+
+
+def numpy_forward(weights, x):
+    """The weights file's net on the rows of x (physical inputs), written from the file format alone."""
+    encoding = weights.get("encoding", "raw")
+    if encoding == "link_angles":
+        phi = np.cumsum(x, axis=1)
+        x = np.stack([f(phi[:, i]) for i in range(phi.shape[1]) for f in (np.cos, np.sin)], axis=1)
+    elif encoding == "joint_angles":
+        x = np.stack([f(x[:, i]) for i in range(x.shape[1]) for f in (np.cos, np.sin)], axis=1)
+    lo, hi = np.array(weights["input_scaling"]["min"]), np.array(weights["input_scaling"]["max"])
+    span = np.where(hi > lo, hi - lo, 2.0)
+    xs = np.where(hi > lo, 2.0 * (x - lo) / span - 1.0, x)
+    hidden = np.tanh(xs @ np.array(weights["iw"]).T + np.array(weights["b1"]))
+    ys = hidden @ np.array(weights["lw"]).T + np.array(weights["b2"])
+    lo, hi = np.array(weights["output_scaling"]["min"]), np.array(weights["output_scaling"]["max"])
+    return np.where(hi > lo, (ys + 1.0) * (hi - lo) / 2.0 + lo, ys)
+
+
+@pytest.fixture(scope="module")
+def periodic_fmu(neurarm, tmp_path_factory):
+    """A gravity-only compensator whose 4-8-4 net sees the link angles as (cos, sin)."""
+    d = tmp_path_factory.mktemp("periodic")
+    rng = np.random.default_rng(3)
+    q = rng.uniform(0, 2 * np.pi, size=(400, J))
+    g = {f"q_{i + 1}": q[:, i] for i in range(J)}
+    g.update({f"tau_{i + 1}": np.cos(q[:, : i + 1].sum(axis=1)) * (4 - i) for i in range(J)})
+    write_csv(d / "g.csv", g)
+    net = d / "g.json"
+    subprocess.run([neurarm, "train", "-d", d / "g.csv", "--inputs", ",".join(f"q_{i}" for i in range(1, J + 1)),
+                    "--targets", ",".join(f"tau_{i}" for i in range(1, J + 1)), "--hidden", "8", "--epochs", "60",
+                    "--encoding", "link-angles", "-o", net], check=True)
+    out = d / "Periodic.fmu"
+    subprocess.run([neurarm, "export", "compensator", "--gravity", net, "-o", out], check=True)
+    return net, out
+
+
+def test_periodic_gravity_net_equals_numpy_and_repeats_every_turn(neurarm, periodic_fmu, tmp_path):
+    net, fmu_path = periodic_fmu
+    weights = json.loads(net.read_text())
+    assert weights["encoding"] == "link_angles" and len(weights["iw"][0]) == 2 * J
+    assert validate_fmu(str(fmu_path)) == []
+    rng = np.random.default_rng(11)
+    q = rng.uniform(-20, 20, size=(500, J))
+    slave = Slave(fmu_path).start()
+    names = [f"tau_gravity_{i}" for i in range(1, J + 1)]
+    got = np.array([slave.outputs(q[s], np.zeros(J), names) for s in range(len(q))])
+    assert np.abs(got - numpy_forward(weights, q)).max() <= 1e-12
+    g = rust_eval(neurarm, net, {f"q_{i}": q[:, i - 1] for i in range(1, J + 1)}, tmp_path, "periodic")
+    assert np.abs(got - np.stack([g[f"tau_{i}"] for i in range(1, J + 1)], axis=1)).max() <= 1e-12
+    for i in range(J):
+        turned = q.copy()
+        turned[:, i] += 2 * np.pi * rng.choice([-2, -1, 1, 3], size=len(q))
+        again = np.array([slave.outputs(turned[s], np.zeros(J), names) for s in range(len(q))])
+        assert np.abs(again - got).max() <= 1e-12, f"not 2π-periodic in q_{i + 1}"
+    # The net learnt the targets (a cos of the link angles), not just something periodic.
+    truth = np.stack([np.cos(q[:, : i + 1].sum(axis=1)) * (4 - i) for i in range(J)], axis=1)
+    assert np.abs(got - truth).max() < 0.05
