@@ -102,6 +102,10 @@ enum Command {
         /// raw (the paper's net, not periodic; a periodic net's run also trains it for comparison).
         #[arg(long, value_parser = parse_encoding)]
         gravity_inputs: Option<InputEncoding>,
+        /// Also measure the gravity error against the number of poses (grids and sampled designs
+        /// up to N poses, every input encoding) for the report: adds minutes to a full run.
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(30..=20_000))]
+        gravity_study: Option<u64>,
         /// Average the gravity passes as measured (the paper's procedure) instead of first
         /// taking the identified friction out of each.
         #[arg(long)]
@@ -346,6 +350,7 @@ fn run(cli: Cli) -> Result<()> {
             gravity_poses,
             gravity_grid,
             gravity_inputs,
+            gravity_study,
             gravity_plain_average,
         } => {
             use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
@@ -371,6 +376,7 @@ fn run(cli: Cli) -> Result<()> {
                 settings.gravity_encoding = encoding;
             }
             settings.gravity_friction_correction = !gravity_plain_average;
+            settings.gravity_study = gravity_study.map(|n| n as usize);
             if let Some(g) = joint_gains {
                 (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", &g)?;
                 settings.scale_joint_gains = false;

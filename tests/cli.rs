@@ -308,7 +308,13 @@ fn paper_measures_gravity_at_sampled_poses_over_the_whole_turn() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let arm = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/arms/arm3.toml");
-    neurarm().args(["paper", "--quick", "--gravity-poses", "120", "-c"]).arg(&arm).arg("-o").arg(&out).assert().success();
+    neurarm()
+        .args(["paper", "--quick", "--gravity-poses", "120", "--gravity-study", "60", "-c"])
+        .arg(&arm)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success();
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["gravity"]["design"]["kind"].as_str(), Some("sampled"));
     assert_eq!(json["gravity"]["pairs"].as_u64(), Some(120));
@@ -320,6 +326,11 @@ fn paper_measures_gravity_at_sampled_poses_over_the_whole_turn() {
         assert!(q.iter().any(|&a| a > 2.0 * std::f64::consts::PI * 5.0 / 6.0), "{name} reaches the last sixth of the turn");
     }
     assert_eq!(json["gravity"]["encoding"].as_str(), Some("link_angles"));
+    // The study: the 3³ grid and sampled 25, 50, 60 poses, three encodings each, over the whole turn.
+    let points = json["gravity"]["study"]["points"].as_array().unwrap();
+    assert_eq!(points.len(), 4 * 3);
+    assert!(points.iter().all(|p| p["rms_share"].as_array().unwrap().len() == 3));
+    assert!(out.join("gravity_study.png").is_file() && out.join("data/gravity_study.csv").is_file());
     let e = neurarm().args(["paper", "--gravity-poses", "3", "-o"]).arg(dir.path().join("x")).assert().failure();
     assert!(String::from_utf8_lossy(&e.get_output().stderr).contains("--gravity-poses"));
     // A design too large to measure is refused before anything runs, naming the way out.

@@ -9,7 +9,7 @@ use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};
 
 use super::friction::FrictionCurve;
-use super::{joint_loop, master, Settings, IDENTIFICATION_INTERNAL_STEP_S};
+use super::{joint_loop, master, parallel, GravityDesign, Settings, IDENTIFICATION_INTERNAL_STEP_S};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{gravity_torques, inverse_dynamics_rnea_into, ArmData, ArmParams};
 use neurarm_physics::nn::{train, InputEncoding, Signal, TrainSettings, WeightsFile};
@@ -45,27 +45,91 @@ pub fn gravity_grid(grid: usize, joints: usize) -> Vec<Vec<f64>> {
 /// 2π-periodic in every angle, so the shifted poses measure the same torques; wrap the
 /// measured angles back into [0, 2π) before training.
 pub fn sampled_poses(poses: usize, joints: usize, seed: u64) -> Vec<Vec<f64>> {
+    sampled_poses_drawn(poses, joints, seed).into_iter().map(|(_, pose)| pose).collect()
+}
+
+/// [`sampled_poses`] with each pose's place in the draw: the poses drawn first N of a larger
+/// design are themselves a uniform design of N poses (what [`gravity_study`] uses).
+pub fn sampled_poses_drawn(poses: usize, joints: usize, seed: u64) -> Vec<(usize, Vec<f64>)> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let mut left: Vec<Vec<f64>> = (0..poses).map(|_| (0..joints).map(|_| rng.gen::<f64>() * 2.0 * PI).collect()).collect();
+    let mut left: Vec<(usize, Vec<f64>)> = (0..poses).map(|i| (i, (0..joints).map(|_| rng.gen::<f64>() * 2.0 * PI).collect())).collect();
     let nearest_turn = |a: f64, b: f64| b + ((a - b) / (2.0 * PI)).round() * 2.0 * PI;
-    let mut path: Vec<Vec<f64>> = Vec::with_capacity(poses);
+    let mut path: Vec<(usize, Vec<f64>)> = Vec::with_capacity(poses);
     while !left.is_empty() {
         let next = match path.last() {
             None => 0,
-            Some(current) => {
+            Some((_, current)) => {
                 let distance = |p: &Vec<f64>| p.iter().zip(current).map(|(b, a)| (nearest_turn(*a, *b) - a).abs()).fold(0.0, f64::max);
-                (0..left.len()).min_by(|&i, &j| distance(&left[i]).total_cmp(&distance(&left[j]))).expect("poses left")
+                (0..left.len()).min_by(|&i, &j| distance(&left[i].1).total_cmp(&distance(&left[j].1))).expect("poses left")
             }
         };
-        let mut pose = left.swap_remove(next);
-        if let Some(current) = path.last() {
+        let (index, mut pose) = left.swap_remove(next);
+        if let Some((_, current)) = path.last() {
             for (b, a) in pose.iter_mut().zip(current) {
                 *b = nearest_turn(*a, *b);
             }
         }
-        path.push(pose);
+        path.push((index, pose));
     }
     path
+}
+
+/// The poses of `design` for `joints` joints in sweep order, and the span of each trained
+/// angle [rad] (the grid's 2π(k−1)/k, or the whole turn).
+pub fn design_poses(design: GravityDesign, joints: usize, seed: u64) -> (Vec<Vec<f64>>, f64) {
+    let poses = match design {
+        GravityDesign::Grid { per_joint } => gravity_grid(per_joint, joints),
+        GravityDesign::Sampled { poses } => sampled_poses(poses, joints, seed),
+    };
+    (poses, design_span(design))
+}
+
+/// The span of each angle a design's poses cover [rad]: 2π(k−1)/k for a kⁿ grid, the whole
+/// turn for a sampled design.
+pub fn design_span(design: GravityDesign) -> f64 {
+    match design {
+        GravityDesign::Grid { per_joint } => 2.0 * PI * (per_joint as f64 - 1.0) / per_joint as f64,
+        GravityDesign::Sampled { .. } => 2.0 * PI,
+    }
+}
+
+/// Measures `poses` (in sweep order) with [`gravity_sweep`], split over `settings.threads`
+/// workers; `wrap` brings the measured angles back into [0, 2π) (for paths shifted by whole
+/// turns). `done` is called as each worker's part finishes.
+#[allow(clippy::too_many_arguments)]
+pub fn measure_gravity(
+    arm_fmu: &Path,
+    controller: &Path,
+    model: &ArmParams,
+    poses: &[Vec<f64>],
+    wrap: bool,
+    correction: Option<&[FrictionCurve]>,
+    settings: &Settings,
+    done: &(dyn Fn() + Sync),
+) -> Result<GravitySweep, String> {
+    let chunk = poses.len().div_ceil(settings.threads.max(1)).max(1);
+    let chunks: Vec<Vec<Vec<f64>>> = poses.chunks(chunk).map(|c| c.to_vec()).collect();
+    let swept = parallel(
+        chunks,
+        settings.threads,
+        |points| {
+            gravity_sweep(arm_fmu, controller, model, &points, correction, settings).map_err(|e| format!("gravity identification: {e}"))
+        },
+        done,
+    )?;
+    let mut all = GravitySweep::default();
+    for sweep in swept {
+        all.pairs.extend(sweep.pairs);
+        all.pairs_uncorrected.extend(sweep.pairs_uncorrected);
+        all.time_s += sweep.time_s;
+    }
+    if wrap {
+        // Gravity is 2π-periodic in each angle.
+        for (q, _) in all.pairs.iter_mut().chain(all.pairs_uncorrected.iter_mut()) {
+            q.iter_mut().for_each(|a| *a = a.rem_euclid(2.0 * PI));
+        }
+    }
+    Ok(all)
 }
 
 /// Speed of the gravity sweep's passes [rad/s].

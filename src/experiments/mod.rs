@@ -6,6 +6,7 @@
 
 pub mod friction;
 pub mod gravity;
+pub mod gravity_study;
 pub mod joint_space;
 pub mod paper;
 pub mod settings;
@@ -27,7 +28,8 @@ use neurarm_physics::config::ArmConfig;
 
 pub use friction::{bin_friction, friction_run, rest_pair, train_friction_net, FrictionHold, FrictionPair, FrictionRun};
 pub use gravity::{
-    gravity_grid, gravity_net_errors, gravity_sweep, sampled_poses, train_gravity_net, GravityPair, GRAVITY_SWEEP_SPEED_RAD_S,
+    design_poses, gravity_grid, gravity_net_errors, gravity_sweep, measure_gravity, sampled_poses, train_gravity_net, GravityPair,
+    GravitySweep, GRAVITY_SWEEP_SPEED_RAD_S,
 };
 pub use joint_space::{gravity_compensation_system, joint_rms_errors, joint_settled_errors};
 pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_GRAVITY_POSES, MAX_JOINTS, MIN_JOINTS};

@@ -10,6 +10,7 @@ use serde::Serialize;
 use super::friction::FrictionCurve;
 use super::friction::{friction_net_error, hold_gains, pair_error, FrictionNetError};
 use super::gravity::{gravity_pair_error, GravityNetErrors};
+use super::gravity_study::{gravity_study, GravityStudy};
 use super::*;
 use crate::table::{write_text_atomic, writing};
 use neurarm_physics::nn::{InputEncoding, WeightsFile};
@@ -145,6 +146,8 @@ pub struct GravityResults {
     pub encoding: InputEncoding,
     /// The compensator's net against the true gravity on random poses.
     pub net: GravityNetErrors,
+    /// Error against the number of measured poses (with `--gravity-study`).
+    pub study: Option<GravityStudy>,
     /// The paper's raw-angle net trained on the same pairs, for comparison (when the
     /// compensator's net is a periodic one).
     pub raw_net: Option<GravityNetErrors>,
@@ -377,37 +380,14 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
 
     // Gravity identification: the grid split between the workers.
     let design = settings.design_for(n);
-    let (grid, span) = match design {
-        GravityDesign::Grid { per_joint } => (gravity_grid(per_joint, n), 2.0 * PI * (per_joint as f64 - 1.0) / per_joint as f64),
-        GravityDesign::Sampled { poses } => (sampled_poses(poses, n, settings.seed + 17), 2.0 * PI),
-    };
-    let chunk = grid.len().div_ceil(settings.threads.max(1));
-    let chunks: Vec<Vec<Vec<f64>>> = grid.chunks(chunk).map(|c| c.to_vec()).collect();
-    let b = bar(chunks.len() as u64, "gravity identification");
+    let (poses, span) = design_poses(design, n, settings.seed + 17);
+    let b = bar(settings.threads.min(poses.len()) as u64, "gravity identification");
     let curves: Vec<FrictionCurve> = friction_pairs[0].iter().map(|p| FrictionCurve::new(p)).collect();
     let correction = settings.gravity_friction_correction.then_some(curves.as_slice());
-    let swept = parallel(
-        chunks,
-        settings.threads,
-        |points| {
-            gravity_sweep(&fmus.arm, &fmus.joint_controller, model, &points, correction, settings)
-                .map_err(|e| format!("gravity identification: {e}"))
-        },
-        || b.inc(1),
-    )?;
+    let wrap = matches!(design, GravityDesign::Sampled { .. });
+    let sweep = measure_gravity(&fmus.arm, &fmus.joint_controller, model, &poses, wrap, correction, settings, &|| b.inc(1))?;
     b.finish_and_clear();
-    let mut gravity_pairs: Vec<GravityPair> = Vec::new();
-    let mut uncorrected: Vec<GravityPair> = Vec::new();
-    for sweep in swept {
-        gravity_pairs.extend(sweep.pairs);
-        uncorrected.extend(sweep.pairs_uncorrected);
-    }
-    if let GravityDesign::Sampled { .. } = design {
-        // The sampled path shifts poses by whole turns; gravity is 2π-periodic in each angle.
-        for (q, _) in gravity_pairs.iter_mut().chain(uncorrected.iter_mut()) {
-            q.iter_mut().for_each(|a| *a = a.rem_euclid(2.0 * PI));
-        }
-    }
+    let (gravity_pairs, uncorrected) = (sweep.pairs, sweep.pairs_uncorrected);
     lap("gravity identification", log);
     // The compensator's net and, beside a periodic one, the paper's raw-angle net on the same
     // pairs, trained in parallel.
@@ -453,8 +433,16 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         },
         net: net_errors,
         raw_net: raw_errors,
+        study: None,
     };
     lap("training gravity net", log);
+    let mut gravity = gravity;
+    if let Some(largest) = settings.gravity_study {
+        let b = bar(1, &format!("gravity study (up to {largest} poses)"));
+        gravity.study = Some(gravity_study(&fmus.arm, &fmus.joint_controller, model, correction, largest, settings)?);
+        b.finish_and_clear();
+        lap("gravity study", log);
+    }
 
     // The NN compensator FMUs: the full one (both nets) is the deliverable; the loops use
     // ones exported with only the part they compensate.

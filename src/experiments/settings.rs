@@ -31,6 +31,9 @@ pub struct Settings {
     /// How the gravity net sees the angles: periodic link angles by default; `Raw` is the
     /// paper's net (then also trained beside a periodic one for the report).
     pub gravity_encoding: InputEncoding,
+    /// Also run the gravity study (error against measured poses, grid vs sampled, every
+    /// encoding) up to this many poses; none to skip it.
+    pub gravity_study: Option<usize>,
     /// Take the identified friction out of each gravity pass before averaging (keeps friction
     /// that differs with the direction out of the pairs); false is the paper's plain average.
     pub gravity_friction_correction: bool,
@@ -77,6 +80,7 @@ impl Settings {
             gravity_design: None,
             gravity_encoding: InputEncoding::LinkAngles,
             gravity_friction_correction: true,
+            gravity_study: None,
             max_velocity: 5.0,
             velocity_spacing: 0.1,
             bin_width: 0.05,

@@ -5,8 +5,10 @@
 use std::path::Path;
 
 use super::plot::{write_png, Panel, Series, Style};
+use crate::experiments::gravity_study::GravityStudy;
 use crate::experiments::paper::PaperRun;
-use crate::experiments::LoopRun;
+use crate::experiments::{GravityDesign, LoopRun};
+use neurarm_physics::nn::InputEncoding;
 
 /// Most points of a scatter series: more only slows the PNG down.
 const MAX_SCATTER: usize = 2000;
@@ -99,6 +101,10 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
     let poses = run.results.gravity.net.poses;
     write_png(&out.join("gravity.png"), &format!("Gravity net error on {poses} random poses (base turned 90°)"), &panels, columns)?;
 
+    if let Some(study) = &run.results.gravity.study {
+        write_study_figure(out, study)?;
+    }
+
     let mut panels = Vec::new();
     for j in 1..=n {
         let t = loops[5].column("time").unwrap_or_default();
@@ -114,6 +120,42 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
         panels.push(Panel { title: format!("joint {j}"), x_label: "t [s]".into(), y_label: "q [rad]".into(), series });
     }
     write_png(&out.join("gravity_compensation.png"), "Joint-space P control with gravity compensation", &panels, 2)
+}
+
+/// `gravity_study.png`: the worst joint's whole-turn RMS error and largest error against the
+/// poses measured, per design and encoding, both axes in decades.
+fn write_study_figure(out: &Path, study: &GravityStudy) -> Result<(), String> {
+    let series_of = |largest: bool| -> Vec<Series> {
+        let mut series = Vec::new();
+        for encoding in [InputEncoding::LinkAngles, InputEncoding::JointAngles, InputEncoding::Raw] {
+            for (design, grid) in [("grid", true), ("sampled", false)] {
+                let points = study
+                    .points
+                    .iter()
+                    .filter(|p| p.encoding == encoding && matches!(p.design, GravityDesign::Grid { .. }) == grid)
+                    .map(|p| {
+                        let share = if largest { p.worst_max_share() } else { p.worst_rms_share() };
+                        ((p.poses as f64).log10(), (100.0 * share).log10())
+                    })
+                    .collect();
+                let style = if grid { Style::Dashed } else { Style::Line };
+                series.push(Series { name: format!("{design}, {}", encoding.name().replace('_', " ")), points, style });
+            }
+        }
+        series
+    };
+    let panels = [("RMS error, worst joint", false), ("largest error, worst joint", true)].map(|(title, largest)| Panel {
+        title: title.into(),
+        x_label: "log10 poses measured".into(),
+        y_label: "log10 error [% of the joint's largest torque]".into(),
+        series: series_of(largest),
+    });
+    write_png(
+        &out.join("gravity_study.png"),
+        &format!("Gravity net error over the whole turn against the poses measured ({} joints)", study.joints),
+        &panels,
+        2,
+    )
 }
 
 /// How the report names the real arm: "emulated real" or "real (given)".

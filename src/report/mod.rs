@@ -35,6 +35,28 @@ pub fn write_report(out: &Path, run: &PaperRun) -> Result<(), String> {
     }
     let names: Vec<String> = (1..=n).map(|i| format!("q_{i}")).chain((1..=n).map(|i| format!("tau_{i}"))).collect();
     write_rows(&data.join("gravity_pairs.csv"), &names, run.gravity_pairs.iter().map(|(q, t)| [q.clone(), t.clone()].concat()))?;
+    if let Some(study) = &run.results.gravity.study {
+        // One row per net: design, poses, encoding, then per joint RMS and largest shares.
+        let names: Vec<String> = ["grid_per_joint", "poses", "encoding"]
+            .into_iter()
+            .map(String::from)
+            .chain((1..=n).map(|i| format!("rms_share_{i}")))
+            .chain((1..=n).map(|i| format!("max_share_{i}")))
+            .collect();
+        let encoding_code = |e: neurarm_physics::nn::InputEncoding| match e {
+            neurarm_physics::nn::InputEncoding::Raw => 0.0,
+            neurarm_physics::nn::InputEncoding::JointAngles => 1.0,
+            neurarm_physics::nn::InputEncoding::LinkAngles => 2.0,
+        };
+        let rows = study.points.iter().map(|p| {
+            let grid = match p.design {
+                crate::experiments::GravityDesign::Grid { per_joint } => per_joint as f64,
+                crate::experiments::GravityDesign::Sampled { .. } => 0.0,
+            };
+            [vec![grid, p.poses as f64, encoding_code(p.encoding)], p.rms_share.clone(), p.max_share.clone()].concat()
+        });
+        write_rows(&data.join("gravity_study.csv"), &names, rows)?;
+    }
     for (name, r) in LOOPS.iter().zip(&run.loops) {
         write_run(&data.join(format!("{name}.csv")), r, 10)?;
     }
