@@ -89,7 +89,8 @@ pub fn gravity_study(
     let mut sizes: Vec<usize> = SAMPLED_SIZES.iter().copied().filter(|&s| s < largest).collect();
     sizes.push(largest);
     for size in sizes {
-        let pairs = order.iter().zip(&sweep.pairs).filter(|(i, _)| **i < size).map(|(_, p)| p.clone()).collect();
+        let drawn_before = |pair: usize| order[sweep.pose_index[pair]] < size;
+        let pairs = (0..sweep.pairs.len()).filter(|&k| drawn_before(k)).map(|k| sweep.pairs[k].clone()).collect();
         designs.push((GravityDesign::Sampled { poses: size }, pairs));
     }
     let measure_s = started.elapsed().as_secs_f64();

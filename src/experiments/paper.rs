@@ -133,6 +133,10 @@ pub struct GravityResults {
     pub default_design: bool,
     /// Poses measured.
     pub pairs: usize,
+    /// Pass pairs measured again because a joint was not steady in a measuring window.
+    pub repeated_passes: usize,
+    /// Poses left out because their passes stayed unsteady (angles in [0, 2π) [rad]).
+    pub dropped_poses: Vec<Vec<f64>>,
     /// Whether each pass had the identified friction taken out before averaging.
     pub friction_correction: bool,
     /// Largest |averaged torque − true gravity at the averaged angles| of the pairs trained
@@ -388,6 +392,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     let sweep = measure_gravity(&fmus.arm, &fmus.joint_controller, model, &poses, wrap, correction, settings, &|| b.inc(1))?;
     b.finish_and_clear();
     let (gravity_pairs, uncorrected) = (sweep.pairs, sweep.pairs_uncorrected);
+    let (repeated_passes, dropped_poses) = (sweep.repeated, sweep.dropped);
     lap("gravity identification", log);
     // The compensator's net and, beside a periodic one, the paper's raw-angle net on the same
     // pairs, trained in parallel.
@@ -421,6 +426,8 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         design,
         default_design: settings.gravity_design.is_none(),
         pairs: gravity_pairs.len(),
+        repeated_passes,
+        dropped_poses,
         friction_correction: settings.gravity_friction_correction,
         pair_error_nm: gravity_pair_error(&gravity_pairs, model),
         pair_error_uncorrected_nm: gravity_pair_error(&uncorrected, model),

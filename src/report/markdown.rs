@@ -4,7 +4,7 @@ use std::f64::consts::PI;
 use std::fmt::Write as _;
 
 use super::figures::real_label;
-use crate::experiments::gravity::RegionErrors;
+use crate::experiments::gravity::{RegionErrors, STEADY_RETRIES, STEADY_SHARE};
 use crate::experiments::paper::{Cases, PaperRun};
 use crate::experiments::{GravityDesign, RealOrigin, GRAVITY_SWEEP_SPEED_RAD_S};
 use neurarm_physics::nn::InputEncoding;
@@ -257,13 +257,23 @@ pub fn report_markdown(run: &PaperRun) -> String {
     );
     let procedure = if g.friction_correction {
         format!(
-            "{:.2e} N·m with the friction taken out and {:.2e} N·m for the plain average of the passes, which keeps half the \
-             difference of the two directions' friction",
+            "{:.2e} N·m with the friction and velocity terms taken out and {:.2e} N·m for the plain average of the passes, which \
+             keeps the Coriolis and centrifugal torques and half the difference of the two directions' friction",
             g.pair_error_nm, g.pair_error_uncorrected_nm
         )
     } else {
         format!("{:.2e} N·m", g.pair_error_nm)
     };
+    let _ = writeln!(
+        s,
+        "A pass is steady when every joint's speed stays within {:.0} % of the pass speed in the measuring window; {} of {} pass \
+         pairs were measured again with passes twice as long, and {} poses were left out after {} repeats.\n",
+        100.0 * STEADY_SHARE,
+        g.repeated_passes,
+        g.pairs + g.dropped_poses.len() + g.repeated_passes,
+        g.dropped_poses.len(),
+        STEADY_RETRIES
+    );
     let _ = writeln!(
         s,
         "The procedure itself, checked against the true model: the largest difference between a pair's torque and the true \
