@@ -391,6 +391,20 @@ mod tests {
     }
 
     #[test]
+    fn the_friction_curve_passes_through_its_pairs_and_is_linear_between_them() {
+        let pairs: Vec<FrictionPair> = vec![(-1.0, -2.0, 5), (-0.1, -1.1, 5), (0.0, 0.1, 3), (0.1, 1.0, 5), (1.0, 1.9, 5)];
+        let curve = friction::FrictionCurve::new(&pairs);
+        for p in &pairs {
+            assert!((curve.torque(p.0) - p.1).abs() < 1e-12, "at {}: {} vs {}", p.0, curve.torque(p.0), p.1);
+        }
+        assert!((curve.torque(0.55) - 1.45).abs() < 1e-12);
+        assert!((curve.torque(-0.05) - (-0.5)).abs() < 1e-12);
+        assert_eq!(curve.torque(3.0), 1.9, "the end pair's value beyond it");
+        assert_eq!(curve.torque(-3.0), -2.0);
+        assert_eq!(friction::FrictionCurve::new(&[]).torque(0.3), 0.0);
+    }
+
+    #[test]
     fn sampled_poses_cover_the_turn_and_the_path_moves_at_most_half_a_turn_per_joint() {
         let poses = sampled_poses(500, 3, 5);
         assert_eq!(poses.len(), 500);

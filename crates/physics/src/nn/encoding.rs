@@ -149,3 +149,89 @@ impl EncodedNet {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nn::{MinMaxScaling, TrainReport, TrainSettings, WeightsFile};
+    use rand::{Rng, SeedableRng};
+
+    fn random_net(encoding: InputEncoding, inputs: usize, seed: u64) -> EncodedNet {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let features = encoding.features(inputs);
+        let scaling = |rows: usize| MinMaxScaling { min: vec![-1.0; rows], max: vec![1.0; rows] };
+        EncodedNet { encoding, mlp: Mlp::nguyen_widrow(7, scaling(features), scaling(3), &mut rng) }
+    }
+
+    #[test]
+    fn link_angles_are_the_circle_points_of_the_running_sums() {
+        let q = [0.3, -1.2, 2.5];
+        let mut out = [0.0; 6];
+        InputEncoding::LinkAngles.encode_into(&q, &mut out);
+        let sums: [f64; 3] = [0.3, 0.3 - 1.2, 0.3 - 1.2 + 2.5];
+        for (j, phi) in sums.iter().enumerate() {
+            assert!((out[2 * j] - phi.cos()).abs() < 1e-15 && (out[2 * j + 1] - phi.sin()).abs() < 1e-15);
+        }
+        InputEncoding::JointAngles.encode_into(&q, &mut out);
+        assert_eq!(out[2..4], [(-1.2f64).cos(), (-1.2f64).sin()]);
+        let mut raw = [0.0; 3];
+        InputEncoding::Raw.encode_into(&q, &mut raw);
+        assert_eq!(raw, q);
+    }
+
+    #[test]
+    fn periodic_nets_repeat_every_turn_in_every_input_and_raw_ones_do_not() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        for encoding in [InputEncoding::LinkAngles, InputEncoding::JointAngles] {
+            let net = random_net(encoding, 3, 1);
+            for _ in 0..200 {
+                let q: Vec<f64> = (0..3).map(|_| rng.gen_range(-10.0..10.0)).collect();
+                let y = net.evaluate(&q);
+                for i in 0..3 {
+                    let mut turned = q.clone();
+                    turned[i] += std::f64::consts::TAU * rng.gen_range(-3..=3) as f64;
+                    let again = net.evaluate(&turned);
+                    assert!(y.iter().zip(&again).all(|(a, b)| (a - b).abs() <= 1e-12), "{encoding:?}: {y:?} vs {again:?}");
+                }
+            }
+        }
+        let raw = random_net(InputEncoding::Raw, 3, 1);
+        let y = raw.evaluate(&[0.1, 0.2, 0.3]);
+        assert!(raw.evaluate(&[0.1 + std::f64::consts::TAU, 0.2, 0.3]).iter().zip(&y).any(|(a, b)| (a - b).abs() > 1e-6));
+    }
+
+    #[test]
+    fn the_weights_file_keeps_the_encoding_and_reads_version_1_files_as_raw() {
+        let net = random_net(InputEncoding::LinkAngles, 2, 3);
+        let signals = |p: &str, n: usize| (0..n).map(|i| crate::nn::Signal { name: format!("{p}_{i}"), unit: "rad".into() }).collect();
+        let report = TrainReport {
+            epochs: 0,
+            best_epoch: 0,
+            stop_reason: crate::nn::StopReason::Epochs,
+            restart: 0,
+            train_mse: 0.0,
+            validation_mse: None,
+            test_mse: None,
+            counts: [1, 0, 0],
+        };
+        let file = WeightsFile::new(&net.mlp, signals("q", 2), signals("tau", 3), TrainSettings::default(), report)
+            .with_encoding(InputEncoding::LinkAngles);
+        let back = WeightsFile::from_json(&file.to_json(), "mem").unwrap();
+        let again = back.network().unwrap();
+        assert_eq!(again.encoding, InputEncoding::LinkAngles);
+        assert_eq!(again.inputs(), 2);
+        assert_eq!(again.evaluate(&[0.4, 1.0]), net.evaluate(&[0.4, 1.0]));
+        // A version 1 file has no encoding field: raw inputs, and its first layer must match them.
+        let mut old: serde_json::Value = serde_json::from_str(&file.to_json()).unwrap();
+        old["version"] = 1.into();
+        old.as_object_mut().unwrap().remove("encoding");
+        let e = WeightsFile::from_json(&old.to_string(), "old.json").unwrap_err().to_string();
+        assert!(e.contains("iw row 0 has 4 values, expected 2"), "{e}");
+        old["version"] = 1.into();
+        old["encoding"] = "link_angles".into();
+        let e = WeightsFile::from_json(&old.to_string(), "old.json").unwrap_err().to_string();
+        assert!(e.contains("version 1 file has raw inputs only"), "{e}");
+        assert!(InputEncoding::parse("polar").unwrap_err().contains("raw, joint_angles, link_angles"));
+        assert_eq!(InputEncoding::parse("link-angles"), Ok(InputEncoding::LinkAngles));
+    }
+}
