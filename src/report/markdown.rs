@@ -314,7 +314,8 @@ pub fn report_markdown(run: &PaperRun) -> String {
         row(&std::iter::once(label.to_owned()).chain(values.iter().map(|&v| f(v))).collect::<Vec<_>>())
     };
     let nm = |v: f64| format!("{v:.4}");
-    let pct = |v: f64| format!("{:.2} %", 100.0 * v);
+    // Three places: a periodic net's errors are hundredths of a percent.
+    let pct = |v: f64| format!("{:.3} %", 100.0 * v);
     let mut regions: Vec<(String, &RegionErrors)> = Vec::new();
     for (name, net) in std::iter::once(("net", &g.net)).chain(g.raw_net.as_ref().map(|r| ("paper's raw net", r))) {
         let name = if g.raw_net.is_some() { format!("{name}, ") } else { String::new() };
