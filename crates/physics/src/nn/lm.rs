@@ -38,7 +38,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::mlp::{MinMaxScaling, Mlp};
-use crate::linalg::{cholesky_shifted, cholesky_solve_factored, ParallelFor, SharedSlice};
+use std::sync::Mutex;
+
+use crate::linalg::{cholesky_shifted, cholesky_solve_factored, ParallelFor, Serial, SharedSlice};
 
 /// How μ changes from epoch to epoch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -513,8 +515,6 @@ struct Workspace {
     p: usize,
     /// Activations ã = [a; 1] per training sample.
     a: Vec<f64>,
-    /// Activations of the last trial step, which become `a` when the step is taken.
-    a_trial: Vec<f64>,
     /// Activations of whatever part was last evaluated (validation, test, reports).
     a_eval: Vec<f64>,
     /// Whether `a` holds the activations of the current parameters on the training part.
@@ -529,15 +529,85 @@ struct Workspace {
     m: Vec<f64>,
     /// Upper triangle of JᵀJ (the lower one is not formed).
     jtj: Vec<f64>,
-    /// Cholesky factor of JᵀJ + μI.
-    work: Vec<f64>,
     g: Vec<f64>,
     /// Jᵀe per sample chunk, added in chunk order into `g`.
     g_chunks: Vec<f64>,
-    /// Squared errors per output per sample chunk.
+    /// Squared errors per output per sample chunk (evaluations other than trial steps).
     sse_chunks: Vec<f64>,
+    /// Buffers of two damped steps, so that two can be tried at once (see [`Workspace::try_step`]).
+    steps: [Mutex<Step>; 2],
+}
+
+/// The buffers of one damped step.
+struct Step {
+    /// Cholesky factor of JᵀJ + μI.
+    factor: Vec<f64>,
     delta: Vec<f64>,
-    trial: Vec<f64>,
+    theta: Vec<f64>,
+    /// Activations at `theta` on the training part, which become the current ones when the
+    /// step is taken.
+    a: Vec<f64>,
+    sse_chunks: Vec<f64>,
+    per_output: Vec<f64>,
+    /// Training MSE (scaled units) at `theta`; none if JᵀJ + μI was not positive definite.
+    mse: Option<f64>,
+}
+
+impl Step {
+    fn new(p: usize, q: usize, h: usize, k: usize) -> Self {
+        Self {
+            factor: vec![0.0; p * p],
+            delta: vec![0.0; p],
+            theta: vec![0.0; p],
+            a: vec![0.0; q * (h + 1)],
+            sse_chunks: vec![0.0; q.div_ceil(SAMPLE_CHUNK) * k],
+            per_output: vec![0.0; k],
+            mse: None,
+        }
+    }
+}
+
+/// Squared errors of `theta` on `part` (dimensions N, H, K, H(N+1)), the activations into
+/// `a_out` and the sums per chunk into `sse_chunks`, then per output (scaled units) into
+/// `per_output`, chunk by chunk in order; returns their sum.
+#[allow(clippy::too_many_arguments)]
+fn forward_into(
+    (n, h, k, ph): (usize, usize, usize, usize),
+    theta: &[f64],
+    part: &Part,
+    a_out: &mut [f64],
+    sse_chunks: &mut [f64],
+    per_output: &mut [f64],
+    par: &dyn ParallelFor,
+) -> f64 {
+    let a_out = SharedSlice::new(&mut a_out[..part.count * (h + 1)]);
+    let sse = SharedSlice::new(&mut sse_chunks[..part.chunks() * k]);
+    par.run(part.chunks(), &|c| {
+        let samples = part.chunk(c);
+        // SAFETY: chunk c's rows and sums belong to this task alone.
+        let (a_rows, sse) = unsafe { (a_out.part(samples.start * (h + 1), samples.len() * (h + 1)), sse.part(c * k, k)) };
+        sse.fill(0.0);
+        let mut err = [0.0; 16];
+        for (s, a) in samples.zip(a_rows.chunks_exact_mut(h + 1)) {
+            activate(n, theta, &part.x[s * (n + 1)..(s + 1) * (n + 1)], &mut a[..h]);
+            a[h] = 1.0;
+            for o0 in (0..k).step_by(16) {
+                let o1 = (o0 + 16).min(k);
+                let err = &mut err[..o1 - o0];
+                output_errors(ph + o0 * (h + 1), h, theta, a, &part.t[s * k + o0..s * k + o1], err);
+                for (acc, e) in sse[o0..o1].iter_mut().zip(err.iter()) {
+                    *acc += e * e;
+                }
+            }
+        }
+    });
+    per_output.fill(0.0);
+    for c in 0..part.chunks() {
+        for o in 0..k {
+            per_output[o] += sse_chunks[c * k + o];
+        }
+    }
+    per_output.iter().sum()
 }
 
 impl Workspace {
@@ -554,7 +624,6 @@ impl Workspace {
             ph,
             p,
             a: vec![0.0; q * (h + 1)],
-            a_trial: vec![0.0; q * (h + 1)],
             a_eval: vec![0.0; q.max(q_eval) * (h + 1)],
             a_current: false,
             e: vec![0.0; q * k],
@@ -563,53 +632,45 @@ impl Workspace {
             gram_tiles,
             m: vec![0.0; h * h],
             jtj: vec![0.0; p * p],
-            work: vec![0.0; p * p],
             g: vec![0.0; p],
             g_chunks: vec![0.0; q.div_ceil(SAMPLE_CHUNK) * p],
             sse_chunks: vec![0.0; chunks * k],
-            delta: vec![0.0; p],
-            trial: vec![0.0; p],
+            steps: [(); 2].map(|_| Mutex::new(Step::new(p, q, h, k))),
         }
     }
 
-    /// Squared errors of `theta` on `part` into `a_out`'s activations and `sse_chunks`, then
-    /// per output (scaled units) into `per_output`, chunk by chunk in order; returns their sum.
-    fn forward(&mut self, theta: &[f64], part: &Part, into_trial: bool, per_output: &mut [f64], par: &Pool) -> f64 {
-        let (n, h, k, ph) = (self.n, self.h, self.k, self.ph);
-        let a_out = if into_trial { &mut self.a_trial } else { &mut self.a_eval };
-        let a_out = SharedSlice::new(&mut a_out[..part.count * (h + 1)]);
-        let sse = SharedSlice::new(&mut self.sse_chunks[..part.chunks() * k]);
-        par.run(part.chunks(), &|c| {
-            let samples = part.chunk(c);
-            // SAFETY: chunk c's rows and sums belong to this task alone.
-            let (a_rows, sse) = unsafe { (a_out.part(samples.start * (h + 1), samples.len() * (h + 1)), sse.part(c * k, k)) };
-            sse.fill(0.0);
-            let mut err = [0.0; 16];
-            for (s, a) in samples.zip(a_rows.chunks_exact_mut(h + 1)) {
-                activate(n, theta, &part.x[s * (n + 1)..(s + 1) * (n + 1)], &mut a[..h]);
-                a[h] = 1.0;
-                for o0 in (0..k).step_by(16) {
-                    let o1 = (o0 + 16).min(k);
-                    let err = &mut err[..o1 - o0];
-                    output_errors(ph + o0 * (h + 1), h, theta, a, &part.t[s * k + o0..s * k + o1], err);
-                    for (acc, e) in sse[o0..o1].iter_mut().zip(err.iter()) {
-                        *acc += e * e;
-                    }
-                }
-            }
-        });
-        per_output.fill(0.0);
-        for c in 0..part.chunks() {
-            for o in 0..k {
-                per_output[o] += self.sse_chunks[c * k + o];
-            }
-        }
-        per_output.iter().sum()
+    /// Squared errors of `theta` on `part` (activations kept in `a_eval`), per output
+    /// (scaled units) into `per_output`; returns their sum.
+    fn forward(&mut self, theta: &[f64], part: &Part, per_output: &mut [f64], par: &Pool) -> f64 {
+        let dims = (self.n, self.h, self.k, self.ph);
+        forward_into(dims, theta, part, &mut self.a_eval, &mut self.sse_chunks, per_output, par)
     }
 
-    /// The last trial step was taken: its activations are now the current ones.
-    fn accept_trial(&mut self) {
-        std::mem::swap(&mut self.a, &mut self.a_trial);
+    /// The damped step of μ from `theta` into `steps[slot]`: factor JᵀJ + μI, solve for δ,
+    /// evaluate the training MSE at θ + δ. Takes `&self` so that two slots can be tried at
+    /// once, each on one thread.
+    fn try_step(&self, slot: usize, theta: &[f64], mu: f64, part: &Part, par: &dyn ParallelFor) {
+        let mut step = self.steps[slot].lock().unwrap_or_else(|e| e.into_inner());
+        let step = &mut *step;
+        step.mse = None;
+        if cholesky_shifted(&self.jtj, mu, &mut step.factor, self.p, par) {
+            step.delta.copy_from_slice(&self.g);
+            cholesky_solve_factored(&step.factor, self.p, &mut step.delta);
+            for ((t, &th), &d) in step.theta.iter_mut().zip(theta).zip(&step.delta) {
+                *t = th + d;
+            }
+            let dims = (self.n, self.h, self.k, self.ph);
+            let sse = forward_into(dims, &step.theta, part, &mut step.a, &mut step.sse_chunks, &mut step.per_output, par);
+            step.mse = Some(sse / (part.count * self.k) as f64);
+        }
+    }
+
+    /// The step in `steps[slot]` was taken: its parameters go to `theta`, its activations
+    /// become the current ones.
+    fn accept_step(&mut self, slot: usize, theta: &mut [f64]) {
+        let step = self.steps[slot].get_mut().unwrap_or_else(|e| e.into_inner());
+        theta.copy_from_slice(&step.theta);
+        std::mem::swap(&mut self.a, &mut step.a);
         self.a_current = true;
     }
 
@@ -839,13 +900,14 @@ fn train_restarts(
         let (mut mu, mut epoch, mut fails) = (s.mu, 0, 0);
         // Nielsen's factor for the next failed step.
         let mut nu = 2.0;
+        let mut last_trials = 0;
         let norm_train = (train_part.count * k) as f64;
-        let mut train_mse = ws.forward(&theta, train_part, false, &mut per_output, pool) / norm_train;
+        let mut train_mse = ws.forward(&theta, train_part, &mut per_output, pool) / norm_train;
         let val_of = |ws: &mut Workspace, theta: &[f64], po: &mut [f64]| {
             if val_part.count == 0 {
                 f64::NAN
             } else {
-                ws.forward(theta, val_part, false, po, pool) / (val_part.count * k) as f64
+                ws.forward(theta, val_part, po, pool) / (val_part.count * k) as f64
             }
         };
         let mut best_val = val_of(ws, &theta, &mut per_output);
@@ -866,46 +928,53 @@ fn train_restarts(
             epoch += 1;
             let mut improved = false;
             let mut trials = 0;
-            while mu <= s.mu_max {
-                trials += 1;
-                let p = ws.p;
-                if cholesky_shifted(&ws.jtj, mu, &mut ws.work, p, pool) {
-                    ws.delta.copy_from_slice(&ws.g);
-                    cholesky_solve_factored(&ws.work, p, &mut ws.delta);
-                    for ((t, &th), &d) in ws.trial.iter_mut().zip(&theta).zip(&ws.delta) {
-                        *t = th + d;
-                    }
-                    let trial = std::mem::take(&mut ws.trial);
-                    let mse = ws.forward(&trial, train_part, true, &mut per_output, pool) / norm_train;
-                    ws.trial = trial;
-                    if mse < train_mse {
+            'steps: while mu <= s.mu_max {
+                // trainlm's second step of an epoch is the first one's μ ×mu_inc. Once an
+                // epoch has needed two, the next one likely will too (μ falls ×mu_dec after
+                // each success, then its first step fails): then two threads try both at once,
+                // each alone, which is faster than one after the other with both threads in
+                // each (the small factorisation has serial parts). The outcome is the same as
+                // trying them in turn; only a second step not needed is wasted.
+                let mu_next = mu * s.mu_inc;
+                let pair = s.damping == Damping::Trainlm && pool.workers() > 0 && last_trials >= 2 && mu_next <= s.mu_max;
+                if pair {
+                    let ws = &*ws;
+                    let theta = &theta;
+                    pool.run(2, &|slot| ws.try_step(slot, theta, [mu, mu_next][slot], train_part, &Serial));
+                } else {
+                    ws.try_step(0, &theta, mu, train_part, pool);
+                }
+                for slot in 0..if pair { 2 } else { 1 } {
+                    trials += 1;
+                    let step = ws.steps[slot].get_mut().unwrap_or_else(|e| e.into_inner());
+                    if let Some(mse) = step.mse.filter(|&m| m < train_mse) {
                         if s.damping == Damping::Nielsen {
                             // Predicted reduction of the squared error by the linear model:
                             // ‖e‖² − ‖e − Jδ‖² = 2δᵀJᵀe − δᵀJᵀJδ = δᵀJᵀe + μ‖δ‖², as
                             // (JᵀJ + μI)δ = Jᵀe.
-                            let dg: f64 = ws.delta.iter().zip(&ws.g).map(|(d, g)| d * g).sum();
-                            let dd: f64 = ws.delta.iter().map(|d| d * d).sum();
+                            let dg: f64 = step.delta.iter().zip(&ws.g).map(|(d, g)| d * g).sum();
+                            let dd: f64 = step.delta.iter().map(|d| d * d).sum();
                             let rho = (train_mse - mse) * norm_train / (dg + mu * dd);
                             mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
                             nu = 2.0;
                         } else {
                             mu *= s.mu_dec;
                         }
-                        theta.copy_from_slice(&ws.trial);
-                        ws.accept_trial();
+                        ws.accept_step(slot, &mut theta);
                         train_mse = mse;
                         improved = true;
-                        break;
+                        break 'steps;
                     }
-                }
-                match s.damping {
-                    Damping::Trainlm => mu *= s.mu_inc,
-                    Damping::Nielsen => {
-                        mu *= nu;
-                        nu *= 2.0;
+                    match s.damping {
+                        Damping::Trainlm => mu *= s.mu_inc,
+                        Damping::Nielsen => {
+                            mu *= nu;
+                            nu *= 2.0;
+                        }
                     }
                 }
             }
+            last_trials = trials;
             let val = val_of(ws, &theta, &mut per_output);
             on_epoch(&EpochInfo { restart, epoch, train_mse, validation_mse: val, mu, trials, parameters: &theta });
             if !improved {
@@ -930,7 +999,7 @@ fn train_restarts(
         net.set_parameters(&best_theta);
         let mut report_mse = |part: &Part| {
             (part.count > 0).then(|| {
-                ws.forward(&best_theta, part, false, &mut per_output, pool);
+                ws.forward(&best_theta, part, &mut per_output, pool);
                 per_output.iter().enumerate().map(|(o, v)| v * output_scaling.error_scale(o)).sum::<f64>() / (part.count * k) as f64
             })
         };
