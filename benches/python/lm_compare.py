@@ -185,7 +185,7 @@ def compare(path, budget):
     max_iter = pb.s["epochs"]
     rows = []
     for run in data["neurarm"]:
-        label = f"neurarm {run['damping']} ({run['threads']} thr)"
+        label = f"neurarm {run['damping']}"
         rows.append((label, run["seconds_per_epoch"], run["epochs_to_test_mse_1e-5"], run["seconds_to_test_mse_1e-5"], run["final_test_mse"], run["epochs"], run["seconds"]))
     for name, fn in [("numpy trainlm loop", numpy_trainlm), ("scipy MINPACK lm", scipy_lm), ("jaxopt LM (x64 CPU)", jaxopt_lm)]:
         its, total, hist = fn(pb, max_iter, budget)
@@ -194,9 +194,9 @@ def compare(path, budget):
         rows.append((name, total / max(its, 1), it_to, t_to, final, its, total))
     fmt = lambda v, f: "never" if v is None else f.format(v)
     print(f"\n{data['title']}, same data, split and start ({pb.q} train / {len(pb.Xt)} test samples, {pb.P} weights):")
-    print(f"{'trainer':<30}{'s/iteration':>12}{'its to 1e-5':>12}{'s to 1e-5':>11}{'final test MSE':>16}{'its run':>9}{'s run':>9}")
+    print(f"{'trainer':<36}{'s/iteration':>12}{'its to 1e-5':>12}{'s to 1e-5':>11}{'final test MSE':>16}{'its run':>9}{'s run':>9}")
     for name, per, it_to, t_to, final, its, total in rows:
-        print(f"{name:<30}{per:>12.5f}{fmt(it_to, '{}'):>12}{fmt(t_to, '{:.3f}'):>11}{final:>16.3e}{its:>9}{total:>9.2f}")
+        print(f"{name:<36}{per:>12.5f}{fmt(it_to, '{}'):>12}{fmt(t_to, '{:.3f}'):>11}{final:>16.3e}{its:>9}{total:>9.2f}")
     jax_to = rows[-1][3]
     for name, _, _, t_to, *_ in rows[: len(data["neurarm"])]:
         if jax_to is not None and t_to is not None:
