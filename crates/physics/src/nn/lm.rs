@@ -279,8 +279,20 @@ mod pool {
 
     /// Spin iterations (≈ 0.1–0.3 ms) before a waiting thread sleeps: the gaps between an
     /// epoch's parallel parts are shorter than that, and a sleeping thread takes tens of µs
-    /// to wake.
+    /// to wake. After the first [`SPIN_HARD`] a spinning thread yields its core at every
+    /// iteration, so that on a machine busy with other work it does not hold up the thread
+    /// it waits for.
     const SPIN: u32 = 1 << 14;
+    const SPIN_HARD: u32 = 1 << 11;
+
+    #[inline]
+    fn pause(spins: u32) {
+        if spins < SPIN_HARD {
+            std::hint::spin_loop();
+        } else {
+            std::thread::yield_now();
+        }
+    }
 
     pub struct Pool {
         state: Mutex<State>,
@@ -332,7 +344,7 @@ mod pool {
             loop {
                 let mut spins = 0;
                 while self.generation.load(Ordering::Acquire) == seen && spins < SPIN {
-                    std::hint::spin_loop();
+                    pause(spins);
                     spins += 1;
                 }
                 let job = {
@@ -383,7 +395,7 @@ mod pool {
         fn drop(&mut self) {
             let mut spins = 0;
             while self.0.busy.load(Ordering::Acquire) > 0 && spins < SPIN {
-                std::hint::spin_loop();
+                pause(spins);
                 spins += 1;
             }
             let mut st = self.0.lock();
