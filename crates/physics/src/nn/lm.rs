@@ -19,7 +19,8 @@
 //! factorisation into fixed column pieces ([`crate::linalg::cholesky_shifted`]); threads take
 //! these tasks as they come free and sums over chunks are added in chunk order. So the result
 //! is bitwise the same for any number of threads ([`train_with_threads`]; [`train`] uses
-//! [`default_threads`]).
+//! [`default_threads`]). With trainlm's rule, once an epoch has needed two damped steps the
+//! next epoch's first two (μ and μ·mu_inc) are tried at once, one per thread.
 //!
 //! # Damping
 //! [`Damping::Trainlm`] (the default) is `trainlm`'s rule. [`Damping::Nielsen`] scales μ by
@@ -71,9 +72,12 @@ pub struct TrainSettings {
     pub min_grad: f64,
     /// Initial μ.
     pub mu: f64,
-    /// μ factor after a successful step.
+    /// μ factor after a successful step ([`Damping::Trainlm`]). trainlm's 0.1 with
+    /// `mu_inc` 10 makes nearly every epoch fail once then succeed; "delayed gratification"
+    /// factors (0.2 and 2, after Transtrum & Sethna) try more steps per epoch but need far
+    /// fewer epochs: on the gravity benches 3–5× fewer, and 2–4× less time to a given error.
     pub mu_dec: f64,
-    /// μ factor after a failed step.
+    /// μ factor after a failed step ([`Damping::Trainlm`]).
     pub mu_inc: f64,
     /// Stop when μ exceeds this.
     pub mu_max: f64,
