@@ -2,7 +2,7 @@
 //! of known functions, determinism, early stopping and the weights file.
 
 use nalgebra::DMatrix;
-use neurarm_physics::nn::lm::{normal_equations, output_jacobian, split};
+use neurarm_physics::nn::lm::{normal_equations, output_jacobian, split, train_with_threads, Damping};
 use neurarm_physics::nn::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -47,11 +47,13 @@ fn analytic_jacobian_equals_central_differences() {
 #[test]
 fn structured_normal_equations_equal_the_naive_products() {
     let mut rng = ChaCha8Rng::seed_from_u64(2);
-    for (n, h, k, q) in [(1, 5, 1, 20), (4, 6, 4, 30), (2, 3, 3, 11)] {
+    for (n, h, k, q) in [(1, 5, 1, 20), (4, 6, 4, 30), (2, 3, 3, 11), (3, 20, 2, 300)] {
         let net = random_net(&mut rng, n, h, k);
         let x = DMatrix::from_fn(n, q, |_, _| rng.gen_range(-1.0..1.0));
         let t = DMatrix::from_fn(k, q, |_, _| rng.gen_range(-1.0..1.0));
-        let (jtj, g) = normal_equations(&net, &x, &t);
+        let (jtj, g) = normal_equations(&net, &x, &t, 1);
+        // The same, bitwise, when the tiles and chunks are spread over threads.
+        assert!((jtj.clone(), g.clone()) == normal_equations(&net, &x, &t, 3));
         let p = net.parameter_count();
         let mut jtj_naive = vec![0.0; p * p];
         let mut g_naive = vec![0.0; p];
@@ -112,6 +114,52 @@ fn fits_coulomb_viscous_friction_with_restarts() {
     assert!(m5 < 1e-6, "MSE {m5}");
     // Restart 0 is the single start, so the kept one is never worse on validation.
     assert!(five.report.validation_mse.unwrap() <= one.report.validation_mse.unwrap());
+}
+
+#[test]
+fn nielsen_damping_fits_sin_to_1e_minus_8() {
+    let (x, t) = curve(f64::sin, -std::f64::consts::PI, std::f64::consts::PI, 201);
+    let trainlm = train(&x, &t, &TrainSettings { hidden: 10, ..Default::default() }, &mut |_| {}).unwrap();
+    let settings = TrainSettings { hidden: 10, damping: Damping::Nielsen, ..Default::default() };
+    let mut trials = 0;
+    let trained = train(&x, &t, &settings, &mut |e| trials += e.trials).unwrap();
+    let all = mse(&trained.net, &x, &t);
+    eprintln!("sin, Nielsen: {:?}, MSE over all points {all:e}, {trials} trials (trainlm: {:?})", trained.report, trainlm.report);
+    assert!(all < 1e-8, "MSE {all:e}");
+}
+
+#[test]
+fn damping_defaults_to_trainlm_in_files_without_it() {
+    let s: TrainSettings = serde_json::from_str(r#"{"hidden": 7, "epochs": 30}"#).unwrap();
+    assert_eq!(s, TrainSettings { hidden: 7, epochs: 30, ..Default::default() });
+    assert_eq!(s.damping, Damping::Trainlm);
+    let back: TrainSettings =
+        serde_json::from_str(&serde_json::to_string(&TrainSettings { damping: Damping::Nielsen, ..s }).unwrap()).unwrap();
+    assert_eq!(back.damping, Damping::Nielsen);
+}
+
+/// Chunked sums, tiles and the blocked Cholesky split work over threads but never change
+/// it: weights and reports are bitwise the same on 1, 2 and 3 threads, for both dampings.
+/// (Sizes chosen so that there are several sample chunks, Gram panels and Cholesky blocks.)
+#[test]
+fn results_are_bitwise_the_same_on_any_number_of_threads() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let x = DMatrix::from_fn(3, 700, |_, _| rng.gen_range(-2.0..2.0));
+    let t = DMatrix::from_fn(2, 700, |r, c| (x[(0, c)] * (r + 1) as f64).sin() * x[(1, c)] + 0.3 * x[(2, c)].powi(2));
+    for damping in [Damping::Trainlm, Damping::Nielsen] {
+        let s = TrainSettings { hidden: 14, epochs: 25, restarts: 2, damping, ..Default::default() };
+        let run = |threads| {
+            let mut history = Vec::new();
+            let trained =
+                train_with_threads(&x, &t, &s, threads, &mut |e| history.push((e.train_mse.to_bits(), e.mu.to_bits(), e.trials))).unwrap();
+            (trained.net.parameters().iter().map(|v| v.to_bits()).collect::<Vec<_>>(), trained.report, history)
+        };
+        let one = run(1);
+        assert_eq!(one.2.len(), 50, "{damping:?}: both restarts ran all epochs");
+        for threads in [2, 3] {
+            assert!(one == run(threads), "{damping:?}: {threads} threads differ from 1");
+        }
+    }
 }
 
 #[test]
