@@ -16,6 +16,7 @@ use neurarm_models::{
 use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
+use neurarm_physics::nn::lm::Damping;
 use neurarm_physics::nn::{train, InputEncoding, Signal, TrainSettings, WeightsFile};
 use std::io::IsTerminal;
 
@@ -153,6 +154,10 @@ enum Command {
         /// 2π-periodic in every input.
         #[arg(long, value_parser = parse_encoding, default_value = "raw")]
         encoding: InputEncoding,
+        /// How μ changes: trainlm (MATLAB's ×0.1 / ×10, the default) or nielsen (Nielsen's
+        /// gain-ratio rule, which needs fewer epochs on the gravity benches).
+        #[arg(long, value_parser = parse_damping, default_value = "trainlm")]
+        damping: Damping,
         /// Output weights file (JSON).
         #[arg(long, short = 'o')]
         output: PathBuf,
@@ -422,9 +427,9 @@ fn run(cli: Cli) -> Result<()> {
             eprintln!("wrote {} rows to {}", input.time.len(), output.display());
         }
         Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
-        Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, encoding, output } => {
-            let settings =
-                TrainSettings { hidden, restarts, seed, epochs, max_fail, split: [split[0], split[1], split[2]], ..Default::default() };
+        Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, encoding, damping, output } => {
+            let split = [split[0], split[1], split[2]];
+            let settings = TrainSettings { hidden, restarts, seed, epochs, max_fail, split, damping, ..Default::default() };
             let weights = train_from_csv(&data, &inputs, &targets, encoding, settings)?;
             write_text_atomic(&output, &weights.to_json()).with_context(|| format!("writing {}", output.display()))?;
             let r = &weights.report;
@@ -615,6 +620,15 @@ fn train_from_csv(
     bar.finish_and_clear();
     let signals = |names: &[String]| names.iter().map(|n| Signal { name: n.clone(), unit: unit_of(n) }).collect();
     Ok(WeightsFile::new(&trained.net, signals(inputs), signals(targets), settings, trained.report).with_encoding(encoding))
+}
+
+/// Parses a damping rule for clap.
+fn parse_damping(text: &str) -> std::result::Result<Damping, String> {
+    match text.trim() {
+        "trainlm" => Ok(Damping::Trainlm),
+        "nielsen" => Ok(Damping::Nielsen),
+        other => Err(format!("unknown damping '{other}': use trainlm or nielsen")),
+    }
 }
 
 /// Parses an input encoding for clap.

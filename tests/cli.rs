@@ -217,6 +217,27 @@ fn train_and_eval_round_trip_and_report_bad_data() {
         assert_eq!(y.to_bits(), table.column("tau_1").unwrap()[r].to_bits());
     }
 
+    // Nielsen's damping, recorded in the file; an unknown rule is refused.
+    let nielsen = dir.path().join("nielsen.json");
+    neurarm()
+        .args(["train", "-d"])
+        .arg(&data)
+        .args(["--inputs", "qd_1", "--targets", "tau_1", "--damping", "nielsen", "-o"])
+        .arg(&nielsen)
+        .assert()
+        .success();
+    let w = neurarm_physics::nn::WeightsFile::read(&nielsen).unwrap();
+    assert_eq!(w.training.damping, neurarm_physics::nn::lm::Damping::Nielsen);
+    assert!(w.report.train_mse < 1e-3, "Nielsen's rule trains: MSE {}", w.report.train_mse);
+    let o = neurarm()
+        .args(["train", "-d"])
+        .arg(&data)
+        .args(["--inputs", "qd_1", "--targets", "tau_1", "--damping", "fast", "-o"])
+        .arg(dir.path().join("f.json"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("use trainlm or nielsen"));
+
     // Bad data: missing column, text in a number; nothing written.
     let bad = write(dir.path(), "bad.csv", "qd_1,tau_1\n0.1,0.2\n0.2,x\n");
     let out2 = dir.path().join("net2.json");
