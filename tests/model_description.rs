@@ -113,3 +113,42 @@ fn nn_compensator_model_description_has_not_drifted() {
     }
     assert!(std::fs::read_to_string(&path).unwrap_or_default() == xml, "{} differs from the generated description", path.display());
 }
+
+/// A friction net whose input is encoded as angles is refused by name; a periodic gravity net
+/// is taken, and its first layer is checked against the encoded inputs.
+#[test]
+fn nn_compensator_checks_the_encodings_of_its_nets() {
+    use neurarm_models::{ModelSpec, NnCompensatorSpec};
+    use neurarm_physics::nn::InputEncoding;
+    let dir = tempfile::tempdir().unwrap();
+    let build = |friction: &neurarm_physics::nn::WeightsFile, gravity: &neurarm_physics::nn::WeightsFile| {
+        std::fs::write(dir.path().join("friction_1.json"), friction.to_json()).unwrap();
+        std::fs::write(dir.path().join("gravity.json"), gravity.to_json()).unwrap();
+        let spec = FmuSpec {
+            identifier: "NnCompensator".into(),
+            model: ModelSpec::NnCompensator(NnCompensatorSpec {
+                joints: 2,
+                friction: vec!["friction_1.json".into(), "friction_1.json".into()],
+                gravity: Some("gravity.json".into()),
+                enable_friction: true,
+                enable_gravity: true,
+            }),
+        };
+        spec.build_from(Some(dir.path())).map(|_| ()).map_err(|e| e.to_string())
+    };
+    let friction = fixed_weights(1, 3, 1, ("qd", "tau"));
+    let periodic_gravity = fixed_weights(4, 5, 2, ("q", "tau"));
+    let periodic_gravity = neurarm_physics::nn::WeightsFile {
+        inputs: periodic_gravity.inputs[..2].to_vec(),
+        ..periodic_gravity.with_encoding(InputEncoding::LinkAngles)
+    };
+    build(&friction, &periodic_gravity).unwrap();
+    let two = fixed_weights(2, 3, 1, ("qd", "tau"));
+    let angle_friction =
+        neurarm_physics::nn::WeightsFile { inputs: two.inputs[..1].to_vec(), ..two.clone().with_encoding(InputEncoding::JointAngles) };
+    let e = build(&angle_friction, &periodic_gravity).unwrap_err();
+    assert!(e.contains("friction net of joint 1") && e.contains("joint_angles"), "{e}");
+    let raw_shaped = fixed_weights(2, 5, 2, ("q", "tau")).with_encoding(InputEncoding::LinkAngles);
+    let e = build(&friction, &raw_shaped).unwrap_err();
+    assert!(e.contains("iw row 0 has 2 values, expected 4"), "{e}");
+}
