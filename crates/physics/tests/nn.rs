@@ -227,7 +227,8 @@ fn malformed_weights_files_get_clear_messages() {
         let e = WeightsFile::from_json(&v.to_string(), "net.json").unwrap_err().to_string();
         assert!(e.starts_with("net.json: ") && e.contains(expected), "expected {expected:?} in {e:?}");
     };
-    fails(&|v| v["version"] = 2.into(), "version 2 is not supported");
+    fails(&|v| v["version"] = 3.into(), "version 3 is not supported");
+    fails(&|v| v["version"] = 0.into(), "version 0 is not supported");
     fails(&|v| v["format"] = "something".into(), "format is 'something'");
     fails(&|v| v["b2"] = serde_json::json!([0.1, 0.2]), "b2 has 2 values, expected 1");
     fails(&|v| v["iw"][1] = serde_json::json!([1.0, 2.0]), "iw row 1 has 2 values, expected 1");
