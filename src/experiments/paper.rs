@@ -402,12 +402,8 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     }
     let b =
         bar((settings.gravity_epochs * encodings.len()) as u64, &format!("gravity nets ({n} angles, {} hidden)", settings.gravity_hidden));
-    let mut nets = parallel(
-        encodings.clone(),
-        settings.threads,
-        |encoding| train_gravity_net(&gravity_pairs, encoding, settings, &mut |_| b.inc(1)),
-        || {},
-    )?;
+    let mut nets =
+        parallel(encodings, settings.threads, |encoding| train_gravity_net(&gravity_pairs, encoding, settings, &mut |_| b.inc(1)), || {})?;
     b.finish_and_clear();
     let raw_net = (nets.len() > 1).then(|| nets.remove(1));
     let gravity_net = nets.remove(0);
@@ -422,7 +418,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         }
         None => None,
     };
-    let gravity = GravityResults {
+    let mut gravity = GravityResults {
         design,
         default_design: settings.gravity_design.is_none(),
         pairs: gravity_pairs.len(),
@@ -443,7 +439,6 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         study: None,
     };
     lap("training gravity net", log);
-    let mut gravity = gravity;
     if let Some(largest) = settings.gravity_study {
         let b = bar(1, &format!("gravity study (up to {largest} poses)"));
         gravity.study = Some(gravity_study(&fmus.arm, &fmus.joint_controller, model, correction, largest, settings)?);
