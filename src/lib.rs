@@ -9,6 +9,9 @@
 
 pub mod experiments;
 pub mod export;
+pub mod identify;
+pub mod logs;
+pub mod plan;
 pub mod report;
 pub mod simulate;
 pub mod table;

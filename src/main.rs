@@ -43,8 +43,21 @@ enum Command {
         /// A system file (TOML: [[fmu]], [[connection]], [simulation]) to run instead of the arm.
         system: Option<PathBuf>,
         /// Torque input CSV.
-        #[arg(long, short = 't', conflicts_with = "system", required_unless_present = "system")]
+        #[arg(long, short = 't', conflicts_with_all = ["system", "plan"], required_unless_present_any = ["system", "plan"])]
         torque: Option<PathBuf>,
+        /// A plan of `neurarm plan` to play instead, as a robot whose own controller holds and
+        /// tracks the joints (computed torque from the configured arm on the measured angles).
+        #[arg(long, conflicts_with = "system")]
+        plan: Option<PathBuf>,
+        /// With --plan: the controller's step [s].
+        #[arg(long, default_value_t = 0.001, requires = "plan")]
+        step: f64,
+        /// With --plan: write every K-th step only.
+        #[arg(long, default_value_t = 1, requires = "plan", value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+        every: u64,
+        /// The arm's base angle [rad] instead of the configuration's (π/2: gravity in the plane).
+        #[arg(long, allow_hyphen_values = true)]
+        base_angle: Option<f64>,
         #[command(flatten)]
         arm: ArmSource,
         /// Output trajectory CSV; written only if the whole simulation succeeds.
@@ -114,6 +127,43 @@ enum Command {
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig,
+    /// Write the paper's experiments as plans a robot's own controller can play (CSV with units in
+    /// the header, and a .txt beside it that says how to run them).
+    #[command(subcommand)]
+    Plan(PlanCommand),
+    /// Make training pairs from a robot's logs (CSV: time and per joint q_i, qd_i, tau_i).
+    #[command(subcommand)]
+    Identify(IdentifyCommand),
+    /// The whole path from logs to an FMU: identify friction (and gravity), train the nets, export
+    /// the NnCompensator; every intermediate file is kept in a folder.
+    Compensator {
+        /// Log of the friction plan (every joint's runs).
+        #[arg(long)]
+        friction_log: PathBuf,
+        /// Log of the gravity plan.
+        #[arg(long)]
+        gravity_log: Option<PathBuf>,
+        /// The arm (TOML), to take its velocity terms out of the gravity passes.
+        #[arg(long, short = 'c')]
+        config: Option<PathBuf>,
+        /// Folder for the pairs, reports and nets (default: beside the FMU, NAME-files).
+        #[arg(long)]
+        work: Option<PathBuf>,
+        /// Seed of the trainings.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Model identifier (default: the output file's name).
+        #[arg(long)]
+        name: Option<String>,
+        #[command(flatten)]
+        columns: LogColumnArgs,
+        /// Speed of the gravity passes [rad/s].
+        #[arg(long, default_value_t = 0.25)]
+        pass_speed: f64,
+        /// Output .fmu file.
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
     /// Build an FMI 2.0 Co-Simulation FMU.
     #[command(subcommand)]
     Export(Export),
@@ -171,6 +221,142 @@ enum Command {
         #[arg(long, short = 'd')]
         data: PathBuf,
         /// Output CSV.
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+enum PlanCommand {
+    /// Constant-torque levels per joint and direction, chosen from the arm's expected friction.
+    Friction {
+        /// The arm (TOML); the built-in arm if omitted.
+        #[arg(long, short = 'c')]
+        config: Option<PathBuf>,
+        /// Joints to plan, comma-separated (default: all).
+        #[arg(long, value_delimiter = ',')]
+        joints: Option<Vec<usize>>,
+        /// Highest speed of the levels [rad/s].
+        #[arg(long, default_value_t = 5.0)]
+        max_speed: f64,
+        /// Spacing of the levels' speeds [rad/s].
+        #[arg(long, default_value_t = 0.1)]
+        spacing: f64,
+        /// Output plan (.csv; the instructions go to a .txt beside it).
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
+    /// Poses (grid or sampled) with slow up and down passes of every joint.
+    Gravity {
+        /// The arm (TOML), for its joint count; the built-in arm if omitted.
+        #[arg(long, short = 'c')]
+        config: Option<PathBuf>,
+        /// Sampled poses over the whole turn (default: the 7ⁿ grid up to 4 joints, 2401 sampled beyond).
+        #[arg(long, conflicts_with = "grid")]
+        poses: Option<usize>,
+        /// A kⁿ grid.
+        #[arg(long)]
+        grid: Option<usize>,
+        /// Speed of the passes [rad/s].
+        #[arg(long, default_value_t = 0.25)]
+        speed: f64,
+        /// Duration of each pass [s].
+        #[arg(long, default_value_t = 2.0)]
+        pass_time: f64,
+        /// Seed of a sampled design.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output plan (.csv; the instructions go to a .txt beside it).
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
+}
+
+/// The column names of a log; `{i}` stands for the joint number.
+#[derive(Args, Clone)]
+struct LogColumnArgs {
+    /// Time column [s].
+    #[arg(long, default_value = "time")]
+    time_column: String,
+    /// Angle columns [rad].
+    #[arg(long, default_value = "q_{i}")]
+    q_column: String,
+    /// Speed columns [rad/s].
+    #[arg(long, default_value = "qd_{i}")]
+    qd_column: String,
+    /// Torque columns [N·m].
+    #[arg(long, default_value = "tau_{i}")]
+    tau_column: String,
+}
+
+impl LogColumnArgs {
+    fn columns(&self) -> neurarm::identify::LogColumns {
+        neurarm::identify::LogColumns {
+            time: self.time_column.clone(),
+            q: self.q_column.clone(),
+            qd: self.qd_column.clone(),
+            tau: self.tau_column.clone(),
+        }
+    }
+}
+
+#[derive(Subcommand)]
+enum IdentifyCommand {
+    /// Friction pairs of one joint from constant-torque runs: finds the levels (runs of constant
+    /// torque), keeps those that reached a steady speed (drift of the speed over the last window
+    /// at most --drift beyond noise, spread at most --spread), bins them by speed and adds the
+    /// pair at rest from the breakaway probes. Prints every level's verdict; writes the pairs
+    /// (CSV) and the verdicts (JSON beside it).
+    Friction {
+        /// The log (CSV).
+        #[arg(long)]
+        log: PathBuf,
+        /// The joint (from 1).
+        #[arg(long)]
+        joint: usize,
+        #[command(flatten)]
+        columns: LogColumnArgs,
+        /// Width of the speed bins [rad/s].
+        #[arg(long, default_value_t = 0.05)]
+        bin_width: f64,
+        /// Measuring window at the end of each level [s].
+        #[arg(long, default_value_t = 0.5)]
+        window: f64,
+        /// Largest drift of the speed over the window beyond noise [rad/s].
+        #[arg(long, default_value_t = 0.01)]
+        drift: f64,
+        /// Largest spread of the speed about its trend [rad/s] (or 10 % of the speed).
+        #[arg(long, default_value_t = 0.1)]
+        spread: f64,
+        /// The joint's inertia with the others held [kg·m²]: takes what is left of the approach out.
+        #[arg(long)]
+        inertia: Option<f64>,
+        /// Output pairs (.csv).
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
+    /// Gravity pairs from slow passes: finds the up and down passes through each pose, averages
+    /// them at the pose and refuses a pose passed in one direction only.
+    Gravity {
+        /// The log (CSV).
+        #[arg(long)]
+        log: PathBuf,
+        #[command(flatten)]
+        columns: LogColumnArgs,
+        /// Friction pairs of every joint (identify friction's files), in joint order: their
+        /// friction is taken out of each pass.
+        #[arg(long, value_delimiter = ',')]
+        friction: Option<Vec<PathBuf>>,
+        /// The arm (TOML): its velocity terms are taken out of each pass.
+        #[arg(long, short = 'c')]
+        config: Option<PathBuf>,
+        /// Speed of the passes [rad/s].
+        #[arg(long, default_value_t = 0.25)]
+        speed: f64,
+        /// Measuring window at the middle of each pass [s].
+        #[arg(long, default_value_t = 0.2)]
+        window: f64,
+        /// Output pairs (.csv).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -417,9 +603,28 @@ fn run(cli: Cli) -> Result<()> {
             );
             eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
         }
-        Command::Simulate { torque, arm, output, .. } => {
+        Command::Simulate { plan: Some(plan), arm, output, step, every, base_angle, .. } => {
+            let (mut config, initial) = arm.load()?;
+            if let Some(angle) = base_angle {
+                config.arm = config.arm.with_base_angle(angle);
+            }
+            if !(step > 0.0 && step.is_finite()) {
+                bail!("--step must be a positive number of seconds (got {step})");
+            }
+            let plan = neurarm::simulate::Plan::read_csv(&plan, config.arm.dof())?;
+            let initial = ArmState { q: plan.start(&initial.q), qd: initial.qd };
+            let trajectory = neurarm::simulate::simulate_plan(&config, &initial, &plan, step, every as usize)?;
+            let rows = trajectory.rows.len();
+            write_atomic(&output, &trajectory.names, trajectory.rows.into_iter())
+                .with_context(|| format!("writing {}", output.display()))?;
+            eprintln!("wrote {rows} rows to {}", output.display());
+        }
+        Command::Simulate { torque, arm, output, base_angle, .. } => {
             let torque = torque.expect("clap requires --torque without a system file");
-            let (config, initial) = arm.load()?;
+            let (mut config, initial) = arm.load()?;
+            if let Some(angle) = base_angle {
+                config.arm = config.arm.with_base_angle(angle);
+            }
             let input = TorqueInput::read_csv(&torque, config.arm.dof())?;
             let trajectory = simulate(&config, &initial, &input)?;
             write_atomic(&output, &trajectory.names, trajectory.rows.into_iter())
@@ -427,6 +632,112 @@ fn run(cli: Cli) -> Result<()> {
             eprintln!("wrote {} rows to {}", input.time.len(), output.display());
         }
         Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
+        Command::Plan(PlanCommand::Friction { config, joints, max_speed, spacing, output }) => {
+            let source = config.as_ref().map_or("the built-in arm".to_owned(), |c| c.display().to_string());
+            let arm = load_config(config)?.arm;
+            let mut settings = neurarm::plan::FrictionPlanSettings::for_joints(arm.dof());
+            if let Some(j) = joints {
+                settings.joints = j;
+            }
+            settings.max_speed_rad_s = max_speed;
+            settings.spacing_rad_s = spacing;
+            let plan = neurarm::plan::friction_plan(&arm, &settings).map_err(anyhow::Error::msg)?;
+            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &plan.instructions(&source)).map_err(anyhow::Error::msg)?;
+            eprintln!("wrote {} ({} segments, {:.0} s) and {}", output.display(), plan.segments.len(), plan.end_s, notes.display());
+        }
+        Command::Plan(PlanCommand::Gravity { config, poses, grid, speed, pass_time, seed, output }) => {
+            use neurarm::experiments::GravityDesign;
+            let source = config.as_ref().map_or("the built-in arm".to_owned(), |c| c.display().to_string());
+            let n = load_config(config)?.arm.dof();
+            let design = match (poses, grid) {
+                (Some(poses), _) => GravityDesign::Sampled { poses },
+                (None, Some(per_joint)) => GravityDesign::Grid { per_joint },
+                (None, None) => neurarm::experiments::Settings::paper().design_for(n),
+            };
+            let settings = neurarm::plan::GravityPlanSettings { design, speed_rad_s: speed, pass_s: pass_time, seed };
+            let plan = neurarm::plan::gravity_plan(n, &settings).map_err(anyhow::Error::msg)?;
+            let notes =
+                neurarm::plan::write_plan(&output, &plan.to_csv(), &plan.instructions(&source, &settings)).map_err(anyhow::Error::msg)?;
+            eprintln!("wrote {} ({} poses, {:.0} s) and {}", output.display(), plan.poses, plan.end_s, notes.display());
+        }
+        Command::Identify(IdentifyCommand::Friction { log, joint, columns, bin_width, window, drift, spread, inertia, output }) => {
+            let columns = columns.columns();
+            columns.check().map_err(anyhow::Error::msg)?;
+            let options = neurarm::identify::FrictionOptions {
+                bin_width_rad_s: bin_width,
+                window_s: window,
+                drift_rad_s: drift,
+                spread_rad_s: spread,
+                inertia_kgm2: inertia,
+                ..Default::default()
+            };
+            options.check().map_err(anyhow::Error::msg)?;
+            neurarm::logs::report_path(&output).map_err(anyhow::Error::msg)?;
+            let robot_log = neurarm::identify::RobotLog::read_joint(&log, &columns, joint)?;
+            let found = neurarm::identify::identify_friction_log(&robot_log, joint, &options).map_err(anyhow::Error::msg)?;
+            eprint!("{}", neurarm::logs::friction_summary(joint, &found));
+            neurarm::logs::write_friction_pairs(&output, joint, &found).map_err(anyhow::Error::msg)?;
+            eprintln!("wrote {} pairs to {}", found.pairs.len(), output.display());
+        }
+        Command::Identify(IdentifyCommand::Gravity { log, columns, friction, config, speed, window, output }) => {
+            let columns = columns.columns();
+            columns.check().map_err(anyhow::Error::msg)?;
+            let options = neurarm::identify::GravityOptions { speed_rad_s: speed, window_s: window, ..Default::default() };
+            options.check().map_err(anyhow::Error::msg)?;
+            neurarm::logs::report_path(&output).map_err(anyhow::Error::msg)?;
+            let model = match config {
+                Some(c) => Some(ArmConfig::from_toml_file(&c)?.arm.with_base_angle(0.0).frictionless()),
+                None => None,
+            };
+            let mut curves = Vec::new();
+            for (k, path) in friction.unwrap_or_default().iter().enumerate() {
+                let (joint, pairs) = neurarm::logs::read_friction_pairs(path).map_err(anyhow::Error::msg)?;
+                if joint != k + 1 {
+                    bail!(
+                        "--friction: {} holds joint {joint}'s pairs but is given as joint {}'s; give them in joint order",
+                        path.display(),
+                        k + 1
+                    );
+                }
+                curves.push(neurarm::identify::FrictionCurve::new(&pairs));
+            }
+            let robot_log = neurarm::identify::RobotLog::read_all(&log, &columns, model.as_ref().map(|m| m.dof()))?;
+            let correction = neurarm::identify::GravityCorrection { friction: &curves, model: model.as_ref() };
+            let found = neurarm::identify::identify_gravity_log(&robot_log, &options, &correction).map_err(anyhow::Error::msg)?;
+            eprint!("{}", neurarm::logs::gravity_summary(&found));
+            neurarm::logs::write_gravity_pairs(&output, &found).map_err(anyhow::Error::msg)?;
+            eprintln!("wrote {} pairs to {}", found.pairs.len(), output.display());
+        }
+        Command::Compensator { friction_log, gravity_log, config, work, seed, name, columns, pass_speed, output } => {
+            let model = match config {
+                Some(c) => Some(ArmConfig::from_toml_file(&c)?.arm),
+                None => None,
+            };
+            let identifier = identifier_for(name, &output, "NnCompensator");
+            let work = work.unwrap_or_else(|| output.with_file_name(format!("{identifier}-files")));
+            let job = neurarm::logs::CompensatorJob {
+                friction_log,
+                gravity_log,
+                columns: columns.columns(),
+                friction: Default::default(),
+                gravity: neurarm::identify::GravityOptions { speed_rad_s: pass_speed, ..Default::default() },
+                model,
+                work: work.clone(),
+                output: output.clone(),
+                identifier,
+                seed,
+            };
+            let summary =
+                neurarm::logs::compensator_from_logs(&job, &mut |line| eprintln!("[compensator] {line}")).map_err(anyhow::Error::msg)?;
+            eprintln!(
+                "wrote {} ({} joints; friction pairs {:?}, gravity pairs {}); intermediate files in {}",
+                output.display(),
+                summary.joints,
+                summary.friction_pairs,
+                summary.gravity_pairs.map_or("-".into(), |g| g.to_string()),
+                work.display()
+            );
+        }
         Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, encoding, damping, output } => {
             let split = [split[0], split[1], split[2]];
             let settings = TrainSettings { hidden, restarts, seed, epochs, max_fail, split, damping, ..Default::default() };

@@ -6,6 +6,7 @@
 //! is the initial state), the end-effector position and velocity, and the torque command of
 //! that row; measured angles and velocities are added when the configuration distorts them.
 
+use std::f64::consts::PI;
 use std::path::Path;
 
 use crate::table::{NumericTable, TableError};
@@ -99,6 +100,14 @@ pub enum SimulateError {
     /// The configuration is invalid.
     #[error("invalid configuration: {0}")]
     Config(neurarm_physics::arm::ParamError),
+    /// The state stopped being finite.
+    #[error("at t = {time} s: joint {joint}'s state is no longer finite (a torque too large for the internal step?)")]
+    Diverged {
+        /// Start of the step [s].
+        time: f64,
+        /// Joint (1-based).
+        joint: usize,
+    },
     /// A step was refused.
     #[error("at t = {time} s: {source}")]
     Step {
@@ -107,4 +116,205 @@ pub enum SimulateError {
         /// Why.
         source: StepError,
     },
+}
+
+/// A plan of `neurarm plan` (see [`crate::plan`]) read back for playing.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Plan {
+    /// Constant torques on one joint, the others held.
+    Friction {
+        /// Segment start times [s]; the last row marks the end.
+        time: Vec<f64>,
+        /// `torque[i][r]`: joint i's torque from row r [N·m].
+        torque: Vec<Vec<f64>>,
+        /// `hold[i][r]`: whether joint i is held from row r.
+        hold: Vec<Vec<bool>>,
+    },
+    /// Moves and constant-speed passes of every joint.
+    Gravity {
+        /// Segment start times [s]; the last row holds the final angles.
+        time: Vec<f64>,
+        /// Pass of each row: 0 a move, ±1 a pass.
+        pass: Vec<i8>,
+        /// `q[i][r]`: joint i's angle at the start of row r [rad].
+        q: Vec<Vec<f64>>,
+        /// `qd[i][r]`: joint i's speed in row r [rad/s].
+        qd: Vec<Vec<f64>>,
+    },
+}
+
+impl Plan {
+    /// Reads a friction plan (it has `hold_i` columns) or a gravity plan (a `pass` column) for
+    /// an arm of `dof` joints.
+    pub fn read_csv(path: &Path, dof: usize) -> Result<Self, TableError> {
+        let probe = NumericTable::read(path, &["time"])?;
+        let col = |t: &NumericTable, n: &str| t.column(n).expect("required").to_vec();
+        if probe.column("hold_1").is_some() {
+            let names: Vec<[String; 2]> = (0..dof).map(|i| [joint_column("tau", i), joint_column("hold", i)]).collect();
+            let mut required = vec!["time"];
+            required.extend(names.iter().flat_map(|n| n.iter().map(String::as_str)));
+            let table = NumericTable::read(path, &required)?;
+            table.require_increasing("time")?;
+            Ok(Plan::Friction {
+                time: col(&table, "time"),
+                torque: names.iter().map(|n| col(&table, &n[0])).collect(),
+                hold: names.iter().map(|n| col(&table, &n[1]).iter().map(|&h| h != 0.0).collect()).collect(),
+            })
+        } else if probe.column("pass").is_some() {
+            let names: Vec<[String; 2]> = (0..dof).map(|i| [joint_column("q", i), joint_column("qd", i)]).collect();
+            let mut required = vec!["time", "pass"];
+            required.extend(names.iter().flat_map(|n| n.iter().map(String::as_str)));
+            let table = NumericTable::read(path, &required)?;
+            table.require_increasing("time")?;
+            let pass: Vec<f64> = col(&table, "pass");
+            if let Some(r) = pass.iter().position(|p| ![-1.0, 0.0, 1.0].contains(p)) {
+                return Err(TableError {
+                    path: path.to_path_buf(),
+                    line: Some(table.lines[r]),
+                    column: None,
+                    message: format!("pass must be -1, 0 or 1, not {}", pass[r]),
+                });
+            }
+            Ok(Plan::Gravity {
+                time: col(&table, "time"),
+                pass: pass.iter().map(|&p| p as i8).collect(),
+                q: names.iter().map(|n| col(&table, &n[0])).collect(),
+                qd: names.iter().map(|n| col(&table, &n[1])).collect(),
+            })
+        } else {
+            Err(TableError {
+                path: path.to_path_buf(),
+                line: Some(1),
+                column: None,
+                message: "not a plan of `neurarm plan`: it has neither hold_i columns (friction) nor a pass column (gravity)".into(),
+            })
+        }
+    }
+
+    /// Start and end of the plan [s].
+    pub fn span(&self) -> (f64, f64) {
+        let t = match self {
+            Plan::Friction { time, .. } | Plan::Gravity { time, .. } => time,
+        };
+        (t[0], t[t.len() - 1])
+    }
+
+    /// The plan's start angles: a gravity plan's first row, or `fallback`.
+    pub fn start(&self, fallback: &[f64]) -> Vec<f64> {
+        match self {
+            Plan::Gravity { q, .. } => q.iter().map(|c| c[0]).collect(),
+            Plan::Friction { .. } => fallback.to_vec(),
+        }
+    }
+}
+
+/// Bandwidth of the emulated controller's holds in a friction plan [rad/s] (computed torque,
+/// critically damped): soft, so sensor noise does not shake the held joints.
+pub const PLAN_HOLD_RAD_S: f64 = 20.0;
+/// Bandwidth of the emulated controller's tracking in a gravity plan [rad/s].
+pub const PLAN_TRACK_RAD_S: f64 = 20.0;
+
+/// Plays `plan` on the configured arm from `initial`, as a robot whose own controller runs at
+/// `step` [s] on the measured angles and speeds: held and tracked joints get computed torque
+/// from the configured arm's rigid-body model (gravity included, friction not), a driven joint
+/// its planned torque. Writes every `every`-th step, as [`simulate`] writes its rows.
+pub fn simulate_plan(config: &ArmConfig, initial: &ArmState, plan: &Plan, step: f64, every: usize) -> Result<Trajectory, SimulateError> {
+    use neurarm_physics::arm::{inverse_dynamics_rnea_into, ArmData};
+    let n = config.arm.dof();
+    let (mut sim, mut sensors) = config.build().map_err(SimulateError::Config)?;
+    let model = config.arm.clone().frictionless();
+    let mut data = ArmData::new(&model);
+    let measured = config.hardware.distorts_measurements();
+    let mut names = vec!["time".to_owned()];
+    for prefix in ["q", "qd"] {
+        names.extend((0..n).map(|i| joint_column(prefix, i)));
+    }
+    names.extend(["x", "y", "xd", "yd"].map(String::from));
+    names.extend((0..n).map(|i| joint_column("tau", i)));
+    if measured {
+        for prefix in ["q_meas", "qd_meas"] {
+            names.extend((0..n).map(|i| joint_column(prefix, i)));
+        }
+    }
+    let (start, end) = plan.span();
+    let steps = ((end - start) / step).round() as usize;
+    let mut state = initial.clone();
+    let (mut q_meas, mut qd_meas) = (vec![0.0; n], vec![0.0; n]);
+    let (mut tau, mut u, mut qd_use) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut hold_at: Vec<Option<f64>> = vec![None; n];
+    let mut rows = Vec::with_capacity(steps / every.max(1) + 1);
+    let mut row_index = 0;
+    for k in 0..=steps {
+        let t = start + k as f64 * step;
+        sensors.measure(&state, &mut q_meas, &mut qd_meas);
+        let times = match plan {
+            Plan::Friction { time, .. } | Plan::Gravity { time, .. } => time,
+        };
+        while row_index + 1 < times.len() && times[row_index + 1] <= t + 1e-9 {
+            row_index += 1;
+        }
+        let r = row_index;
+        match plan {
+            Plan::Friction { torque, hold, .. } => {
+                let w = PLAN_HOLD_RAD_S;
+                for i in 0..n {
+                    if hold[i][r] {
+                        let target = *hold_at[i].get_or_insert(q_meas[i]);
+                        u[i] = w * w * (target - q_meas[i]) - 2.0 * w * qd_meas[i];
+                    } else {
+                        hold_at[i] = None;
+                        u[i] = 0.0;
+                    }
+                    qd_use[i] = qd_meas[i];
+                }
+                inverse_dynamics_rnea_into(&model, &mut data, &q_meas, &qd_use, &u, &mut tau);
+                for i in 0..n {
+                    if !hold[i][r] {
+                        tau[i] = torque[i][r];
+                    }
+                }
+            }
+            Plan::Gravity { time, pass, q, qd } => {
+                let w = PLAN_TRACK_RAD_S;
+                let (t0, t1) = (time[r], time.get(r + 1).copied().unwrap_or(time[r]));
+                for i in 0..n {
+                    let (reference, rate, accel) = if pass[r] != 0 || r + 1 == time.len() {
+                        let moving = if r + 1 == time.len() { 0.0 } else { qd[i][r] };
+                        (q[i][r] + moving * (t - t0), moving, 0.0)
+                    } else {
+                        // Rest-to-rest cosine move to the next row's angles.
+                        let (a, b, d) = (q[i][r], q[i][r + 1], (t1 - t0).max(step));
+                        let s = ((t - t0) / d).clamp(0.0, 1.0);
+                        (
+                            a + (b - a) * (0.5 - 0.5 * (PI * s).cos()),
+                            (b - a) * 0.5 * PI * (PI * s).sin() / d,
+                            (b - a) * 0.5 * PI * PI * (PI * s).cos() / (d * d),
+                        )
+                    };
+                    u[i] = accel + 2.0 * w * (rate - qd_meas[i]) + w * w * (reference - q_meas[i]);
+                }
+                inverse_dynamics_rnea_into(&model, &mut data, &q_meas, &qd_meas, &u, &mut tau);
+            }
+        }
+        if k % every.max(1) == 0 {
+            let mut row = Vec::with_capacity(names.len());
+            row.push(t);
+            row.extend(&state.q);
+            row.extend(&state.qd);
+            row.extend(end_effector_state(&config.arm, &state.q, &state.qd));
+            row.extend(&tau);
+            if measured {
+                row.extend(&q_meas);
+                row.extend(&qd_meas);
+            }
+            rows.push(row);
+        }
+        if k < steps {
+            sim.step(&mut state, &tau, step).map_err(|source| SimulateError::Step { time: t, source })?;
+            if let Some(i) = (0..n).find(|&i| !(state.q[i].is_finite() && state.qd[i].is_finite())) {
+                return Err(SimulateError::Diverged { time: t, joint: i + 1 });
+            }
+        }
+    }
+    Ok(Trajectory { names, rows })
 }

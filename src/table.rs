@@ -34,8 +34,12 @@ impl fmt::Display for TableError {
 /// A table of finite numbers read from CSV, column-major by name.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NumericTable {
-    /// Column names, as in the header.
+    /// Column names, as in the header without a unit in brackets (`qd_1 [rad/s]` is `qd_1`).
     pub names: Vec<String>,
+    /// Each column's unit, when the header gives one in brackets after the name.
+    pub units: Vec<Option<String>>,
+    /// Each column's number in the file (from 1).
+    pub positions: Vec<usize>,
     /// One vector per column, in header order.
     pub columns: Vec<Vec<f64>>,
     /// File line of each row (for later messages about a row).
@@ -48,6 +52,16 @@ impl NumericTable {
     /// Reads `path`, requiring every column in `required` to be present; every cell must be a
     /// finite number. Extra columns are read too.
     pub fn read(path: &Path, required: &[&str]) -> Result<Self, TableError> {
+        Self::read_selected(path, required, false)
+    }
+
+    /// Reads only the columns `wanted` of `path` (each required); the cells of other columns
+    /// are not parsed and may hold anything.
+    pub fn read_only(path: &Path, wanted: &[&str]) -> Result<Self, TableError> {
+        Self::read_selected(path, wanted, true)
+    }
+
+    fn read_selected(path: &Path, required: &[&str], only: bool) -> Result<Self, TableError> {
         let err = |line: Option<u64>, column: Option<(usize, String)>, message: String| TableError {
             path: path.to_path_buf(),
             line,
@@ -58,12 +72,12 @@ impl NumericTable {
             .trim(csv::Trim::All)
             .from_path(path)
             .map_err(|e| err(None, None, format!("cannot open: {}", csv_cause(&e))))?;
-        let names: Vec<String> = reader
+        let (names, units): (Vec<String>, Vec<Option<String>>) = reader
             .headers()
             .map_err(|e| err(Some(1), None, format!("cannot read the header: {}", csv_cause(&e))))?
             .iter()
-            .map(str::to_owned)
-            .collect();
+            .map(split_unit)
+            .unzip();
         if names.iter().all(|n| n.is_empty()) {
             return Err(err(Some(1), None, "the file is empty; a header row is needed".into()));
         }
@@ -77,7 +91,13 @@ impl NumericTable {
                 return Err(err(Some(1), Some((i + 1, name.clone())), "column name repeated".into()));
             }
         }
-        let mut columns = vec![Vec::new(); names.len()];
+        // Which file columns are parsed, in the order kept.
+        let keep: Vec<usize> = if only {
+            required.iter().map(|w| names.iter().position(|n| n == w).expect("checked above")).collect()
+        } else {
+            (0..names.len()).collect()
+        };
+        let mut columns = vec![Vec::new(); keep.len()];
         let mut lines = Vec::new();
         for record in reader.records() {
             let record = record.map_err(|e| {
@@ -85,20 +105,33 @@ impl NumericTable {
                 err(line, None, csv_cause(&e))
             })?;
             let line = record.position().map_or(0, |p| p.line());
-            for (c, cell) in record.iter().enumerate() {
+            for (k, &c) in keep.iter().enumerate() {
+                let cell = record.get(c).unwrap_or("");
                 let at = || Some((c + 1, names[c].clone()));
                 let value: f64 = cell.parse().map_err(|_| err(Some(line), at(), format!("'{cell}' is not a number")))?;
                 if !value.is_finite() {
                     return Err(err(Some(line), at(), format!("{cell} is not a finite number")));
                 }
-                columns[c].push(value);
+                columns[k].push(value);
             }
             lines.push(line);
         }
         if lines.is_empty() {
             return Err(err(None, None, "no data rows after the header".into()));
         }
-        Ok(Self { names, columns, lines, path: path.to_path_buf() })
+        let (names, units) = keep.iter().map(|&c| (names[c].clone(), units[c].clone())).unzip();
+        let positions = keep.iter().map(|c| c + 1).collect();
+        Ok(Self { names, units, positions, columns, lines, path: path.to_path_buf() })
+    }
+
+    /// The unit the header gives column `name`, if any.
+    pub fn unit(&self, name: &str) -> Option<&str> {
+        self.names.iter().position(|n| n == name).and_then(|i| self.units[i].as_deref())
+    }
+
+    /// The file line of row `row` (0-based).
+    pub fn line(&self, row: usize) -> u64 {
+        self.lines[row]
     }
 
     /// The column called `name`, if present.
@@ -120,12 +153,30 @@ impl NumericTable {
                 return Err(TableError {
                     path: self.path.clone(),
                     line: Some(self.lines[r]),
-                    column: Some((index + 1, name.to_owned())),
+                    column: Some((self.positions[index], name.to_owned())),
                     message: format!("{name} must increase from row to row, but {} follows {}", col[r], col[r - 1]),
                 });
             }
         }
         Ok(())
+    }
+}
+
+/// A header cell as (name, unit): `qd_1 [rad/s]` is (`qd_1`, `rad/s`); a cell without brackets
+/// has no unit.
+pub(crate) fn split_unit(cell: &str) -> (String, Option<String>) {
+    match cell.strip_suffix(']').and_then(|c| c.rsplit_once('[')) {
+        Some((name, unit)) if !name.trim().is_empty() => (name.trim().to_owned(), Some(unit.trim().to_owned())),
+        _ => (cell.to_owned(), None),
+    }
+}
+
+/// A header cell for column `name` with `unit` (none for a dimensionless count).
+pub fn header_cell(name: &str, unit: &str) -> String {
+    if unit.is_empty() {
+        name.to_owned()
+    } else {
+        format!("{name} [{unit}]")
     }
 }
 

@@ -6,6 +6,8 @@ use std::path::Path;
 use nalgebra::DMatrix;
 
 use super::{joint_loop, lightest_inertias, master, Settings, IDENTIFICATION_INTERNAL_STEP_S};
+pub use crate::identify::FrictionCurve;
+use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{coriolis_centrifugal_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
@@ -30,39 +32,78 @@ pub enum FrictionHold {
     Rigid,
 }
 
-/// A training pair of a friction net: (velocity [rad/s], mean torque [N·m], samples averaged).
-pub type FrictionPair = (f64, f64, usize);
+pub use crate::identify::FrictionPair;
 
-/// Steady states of one joint under constant torques: (torque [N·m], mean measured velocity
-/// [rad/s]) per level, and the samples of each level's last window.
+/// One joint's run in one direction: the levels it played, each as the samples of its last
+/// measuring window (what [`identify_levels`] judges).
 #[derive(Clone, Debug, Default)]
 pub struct FrictionRun {
     /// Joint index (0-based).
     pub joint: usize,
-    /// (torque, mean velocity) per torque level that moved the joint.
-    pub levels: Vec<(f64, f64)>,
+    /// Each level's last samples: times [s], speeds [rad/s], torques [N·m].
+    pub levels: Vec<LevelRecord>,
     /// Speed-controlled levels below the first moving one (rigid hold only).
     pub speed_levels: usize,
-    /// (velocity sample, torque) of the steady windows: the binned data.
-    pub samples: Vec<(f64, f64)>,
     /// Simulated time [s].
     pub simulated_s: f64,
-    /// The largest torque level that did not move the joint [N·m] (signed), and how many
-    /// levels did not.
-    pub breakaway: (f64, usize),
 }
 
-/// The training pair at rest: (0 rad/s, midpoint of the breakaway torques of the two
-/// directions, number of levels that did not move the joint). At rest friction takes any value
-/// between the two breakaway torques; the midpoint is the compensation that pushes neither
-/// way. Without it no pair lies in the stick band (|q̇| below the first moving level,
-/// ~0.1 rad/s), and where a net puts its jump inside that band is left to chance: with seeds
-/// 1–5 the sim NN/perfect tracking ratio ranged 0.98–4.2. (Pairs at ±ε with the breakaway
-/// torques, to sharpen the jump, made the nets overshoot between ε and the first level.)
-pub fn rest_pair(runs: &[&FrictionRun]) -> Option<(f64, f64, usize)> {
-    let up = runs.iter().find(|r| r.breakaway.0 > 0.0)?;
-    let down = runs.iter().find(|r| r.breakaway.0 < 0.0)?;
-    Some((0.0, 0.5 * (up.breakaway.0 + down.breakaway.0), up.breakaway.1 + down.breakaway.1))
+/// The end of one level: at least a measuring window of samples.
+#[derive(Clone, Debug, Default)]
+pub struct LevelRecord {
+    /// Times [s].
+    pub time: Vec<f64>,
+    /// The driven joint's measured speed [rad/s].
+    pub speed: Vec<f64>,
+    /// The driven joint's torque [N·m].
+    pub torque: Vec<f64>,
+}
+
+impl LevelRecord {
+    /// The record as a level to judge.
+    pub fn level(&self) -> Level<'_> {
+        Level { time: &self.time, speed: &self.speed, torque: &self.torque, line: 0 }
+    }
+
+    fn clear(&mut self) {
+        self.time.clear();
+        self.speed.clear();
+        self.torque.clear();
+    }
+
+    /// Adds a sample, dropping those older than `keep_s` before it.
+    fn push(&mut self, time: f64, speed: f64, torque: f64, keep_s: f64) {
+        self.time.push(time);
+        self.speed.push(speed);
+        self.torque.push(torque);
+        let old = self.time.partition_point(|&t| t < time - keep_s);
+        // Drop in blocks, not sample by sample.
+        if old > 4096 {
+            self.time.drain(..old);
+            self.speed.drain(..old);
+            self.torque.drain(..old);
+        }
+    }
+}
+
+/// The options the paper's friction runs judge their levels with: the documented defaults,
+/// the settings' bin width, and the driven joint's inertia when the hold is rigid.
+pub fn run_options(settings: &Settings, inertia: Option<f64>) -> FrictionOptions {
+    FrictionOptions { bin_width_rad_s: settings.bin_width, inertia_kgm2: inertia, ..FrictionOptions::default() }
+}
+
+/// The pairs of one joint from its runs (both directions): every level judged and binned by
+/// [`identify_levels`], the same code `neurarm identify friction` runs on a robot's log.
+pub fn pairs_of_runs(runs: &[&FrictionRun], options: &FrictionOptions) -> FrictionIdentification {
+    let levels: Vec<Level<'_>> = runs.iter().flat_map(|r| r.levels.iter().map(LevelRecord::level)).collect();
+    identify_levels(&levels, options)
+}
+
+/// Joint `joint`'s (0-based) inertia with the other joints held rigidly at 0 [kg·m²]: H_ff of
+/// the straight arm, which the driven joint's own angle does not change.
+pub fn held_inertia(model: &ArmParams, joint: usize) -> f64 {
+    let rigid_body = model.clone().with_base_angle(0.0).frictionless();
+    neurarm_physics::arm::mass_matrix(&rigid_body, &vec![0.0; model.dof()])[(joint, joint)]
 }
 
 /// Gains of the joint PD loops of the identification experiments: critically damped at
@@ -93,35 +134,10 @@ const SPEED_LEVEL_SETTLE_S: f64 = 0.5;
 /// Time a low-speed level is averaged over [s].
 const SPEED_LEVEL_AVERAGE_S: f64 = 1.0;
 
-/// Smallest change between successive 0.1 s means of the speed that ends a constant-torque
-/// level [rad/s]: the fitted acceleration corrects what is left of the approach, so the level
-/// need not wait for the last digit (2e-4 took 10 × longer on a heavy joint, T = H/b ≈ 3 s).
-const STEADY_FLOOR_RAD_S: f64 = 2e-3;
-
-/// Windows of 0.1 s over which the driven joint's acceleration is fitted at the end of a level.
-const ACCELERATION_WINDOWS: usize = 5;
-
-/// Least-squares slope of `samples` taken every `step` seconds [unit of the samples per s].
-fn slope_per_second(samples: &[f64], step: f64) -> f64 {
-    let n = samples.len();
-    if n < 2 {
-        return 0.0;
-    }
-    let centre = (n as f64 - 1.0) / 2.0;
-    let mean = samples.iter().sum::<f64>() / n as f64;
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for (k, v) in samples.iter().enumerate() {
-        let dx = k as f64 - centre;
-        sxy += dx * (v - mean);
-        sxx += dx * dx;
-    }
-    sxy / sxx / step
-}
-
 /// Drives joint `joint` of the arm in `arm_fmu` with constant torques in `direction` (±1),
 /// the others held at 0 (see [`FrictionHold`]), raising the torque level by level until the
 /// steady speed passes `settings.max_velocity`. Each level lasts until the measured
-/// velocity's 0.1 s means change by less than the noise allows (at most 20 s). The step
+/// level's last window passes the steadiness test of [`FrictionOptions`] (at most 20 s). The step
 /// between levels aims at `velocity_spacing` from the local slope of the levels so far.
 pub fn friction_run(
     arm_fmu: &Path,
@@ -203,36 +219,35 @@ pub fn friction_run(
     let window = (0.1 / settings.step).round() as usize;
     // The driven joint's inertia with the others held rigidly: H_ff, which the held joints'
     // angles (all 0) fix and the driven joint's own angle does not change.
-    let inertia = neurarm_physics::arm::mass_matrix(&rigid_body, &vec![0.0; n])[(joint, joint)];
+    let inertia = held_inertia(model, joint);
+    let options = run_options(settings, rigid.then_some(inertia));
+    let keep_s = options.window_s + 2.0 * settings.step;
     let mut run = FrictionRun { joint, ..Default::default() };
     let mut tau = 0.0;
     let mut increment: f64 = 0.02;
-    let mut buf = vec![0.0; window];
-    let mut history: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
+    // (torque, mean speed) of the levels that moved the joint.
+    let mut moving_levels: Vec<(f64, f64)> = Vec::new();
+    let mut record = LevelRecord::default();
     loop {
         tau += direction * increment;
-        let mut previous = f64::NAN;
         let started = sim.time();
-        history.clear();
-        let mean = loop {
-            for slot in buf.iter_mut() {
-                *slot = step(&mut sim, Drive::Torque(tau))?.0;
+        record.clear();
+        // A level lasts until its last window passes the identification's steadiness test
+        // (or 20 s): the test the levels are judged by afterwards.
+        let verdict = loop {
+            for _ in 0..window {
+                let (speed, torque) = step(&mut sim, Drive::Torque(tau))?;
+                record.push(sim.time(), speed, torque, keep_s);
             }
-            history.extend(buf.iter().copied());
-            while history.len() > ACCELERATION_WINDOWS * window {
-                history.pop_front();
+            let report = judge_level(&record.level(), &options);
+            if matches!(report.verdict, Verdict::Kept | Verdict::AtRest) || sim.time() - started > 20.0 {
+                break report;
             }
-            let mean = buf.iter().sum::<f64>() / window as f64;
-            let spread = (buf.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / window as f64).sqrt();
-            let tolerance = STEADY_FLOOR_RAD_S + 3.0 * spread / (window as f64).sqrt();
-            if (mean - previous).abs() < tolerance || sim.time() - started > 20.0 {
-                break mean;
-            }
-            previous = mean;
         };
+        let mean = verdict.speed_rad_s;
         let moving = mean * direction > 2.0 * settings.bin_width.min(0.05);
         if moving {
-            if let Some(&(t0, v0)) = run.levels.last() {
+            if let Some(&(t0, v0)) = moving_levels.last() {
                 let slope = (tau - t0) / (mean - v0);
                 if slope.is_finite() && slope > 0.0 {
                     // At most doubling: one level whose speed barely moved (noise, the Stribeck
@@ -240,15 +255,16 @@ pub fn friction_run(
                     increment = (slope * settings.velocity_spacing).clamp(1e-3, (2.0 * increment).min(0.5));
                 }
             }
-            run.levels.push((tau, mean));
-            // What is left of the approach to the steady state: friction = τ − H_ff q̈_f, with q̈_f
-            // the slope of the level's last samples (up to 0.5 s). Only the rigid hold keeps
-            // the driven joint's inertia at H_ff.
-            let friction = if rigid { tau - inertia * slope_per_second(history.make_contiguous(), settings.step) } else { tau };
-            run.samples.extend(buf.iter().map(|&x| (x, friction)));
-        } else if run.levels.is_empty() {
-            run.breakaway = (tau, run.breakaway.1 + 1);
+            moving_levels.push((tau, mean));
         }
+        // Every level is kept for the identification, the probes at rest below the first
+        // moving level among them (they give the pair at rest).
+        let trimmed_from = record.time.partition_point(|&t| t < sim.time() - keep_s);
+        run.levels.push(LevelRecord {
+            time: record.time[trimmed_from..].to_vec(),
+            speed: record.speed[trimmed_from..].to_vec(),
+            torque: record.torque[trimmed_from..].to_vec(),
+        });
         if mean * direction >= settings.max_velocity {
             break;
         }
@@ -270,12 +286,12 @@ pub fn friction_run(
     // stiffer loop first would put its gain × the speed noise into the torque of every level.
     // (With constant-torque holds instead of computed torque on all joints, the speed loop and
     // the holds fought and diverged.)
-    if let (true, Some(&(tau_first, v_first))) = (rigid, run.levels.first()) {
+    if let (true, Some(&(tau_first, v_first))) = (rigid, moving_levels.first()) {
         let lowest = settings.bin_width.min(0.05);
         let mut target = v_first.abs() - settings.velocity_spacing;
         let settle = (SPEED_LEVEL_SETTLE_S / settings.step).round() as usize;
         let average = (SPEED_LEVEL_AVERAGE_S / settings.step).round() as usize;
-        let (mut speeds, mut torques) = (Vec::with_capacity(average), Vec::with_capacity(average));
+        let mut level = LevelRecord::default();
         // Down from the first moving level by the spacing, then the two lowest speeds.
         let mut targets = Vec::new();
         while target >= lowest {
@@ -290,20 +306,18 @@ pub fn friction_run(
         for target in targets {
             let wanted = direction * target;
             for bandwidth in SPEED_LOOP_RAD_S {
-                speeds.clear();
-                torques.clear();
+                level.clear();
                 for k in 0..settle + average {
                     let (speed, torque) = step(&mut sim, Drive::Speed { wanted, feedforward: tau_first, bandwidth })?;
                     if k >= settle {
-                        speeds.push(speed);
-                        torques.push(torque);
+                        level.push(sim.time(), speed, torque, f64::INFINITY);
                     }
                 }
-                let mean = speeds.iter().sum::<f64>() / speeds.len() as f64;
+                let mean = level.speed.iter().sum::<f64>() / level.speed.len() as f64;
                 if (mean - wanted).abs() < 0.5 * target {
-                    let torque = torques.iter().sum::<f64>() / torques.len() as f64;
-                    let friction = torque - inertia * slope_per_second(&speeds, settings.step);
-                    run.samples.extend(speeds.iter().map(|_| (mean, friction)));
+                    // Judged like every level: the mean torque of a P loop's steady state, less
+                    // H_ff times the fitted acceleration.
+                    run.levels.push(std::mem::take(&mut level));
                     run.speed_levels += 1;
                     break;
                 }
@@ -312,23 +326,6 @@ pub fn friction_run(
     }
     run.simulated_s = sim.time();
     Ok(run)
-}
-
-/// Bins velocity samples of width `width` over ±`limit` and averages each bin: returns
-/// (mean velocity, mean torque, count) per non-empty bin, by velocity.
-pub fn bin_friction(samples: &[(f64, f64)], width: f64, limit: f64) -> Vec<FrictionPair> {
-    let bins = (2.0 * limit / width).round() as usize;
-    let mut acc = vec![(0.0, 0.0, 0usize); bins];
-    for &(v, t) in samples {
-        if v.abs() >= limit || !v.is_finite() {
-            continue;
-        }
-        let k = (((v + limit) / width).floor() as usize).min(bins - 1);
-        acc[k].0 += v;
-        acc[k].1 += t;
-        acc[k].2 += 1;
-    }
-    acc.into_iter().filter(|b| b.2 > 0).map(|(v, t, n)| (v / n as f64, t / n as f64, n)).collect()
 }
 
 /// Trains one friction net (velocity → torque) on binned pairs.
@@ -386,39 +383,6 @@ pub fn interpolant_rms(net: &neurarm_physics::nn::Mlp, pairs: &[FrictionPair]) -
         sq += (net.evaluate(&[v])[0] - curve.torque(v)).powi(2);
     }
     (sq / (steps + 1) as f64).sqrt()
-}
-
-/// A joint's identified friction as the piecewise-linear interpolant of its pairs: what the
-/// friction experiment measured, without a net's fitting error.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrictionCurve {
-    /// (velocity [rad/s], torque [N·m]) in increasing velocity.
-    points: Vec<(f64, f64)>,
-}
-
-impl FrictionCurve {
-    /// The curve through `pairs` (sorted by velocity, as the binned pairs are).
-    pub fn new(pairs: &[FrictionPair]) -> Self {
-        let mut points: Vec<(f64, f64)> = pairs.iter().map(|p| (p.0, p.1)).collect();
-        points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Self { points }
-    }
-
-    /// The friction torque at `velocity` [rad/s]: interpolated between the neighbouring
-    /// pairs, the end pairs' values beyond them [N·m]; 0 without pairs.
-    pub fn torque(&self, velocity: f64) -> f64 {
-        let p = &self.points;
-        match p.len() {
-            0 => 0.0,
-            1 => p[0].1,
-            len => {
-                let j = p.partition_point(|q| q.0 < velocity).clamp(1, len - 1);
-                let (a, b) = (p[j - 1], p[j]);
-                let w = if b.0 > a.0 { ((velocity - a.0) / (b.0 - a.0)).clamp(0.0, 1.0) } else { 0.0 };
-                a.1 + w * (b.1 - a.1)
-            }
-        }
-    }
 }
 
 /// How well a friction net matches a known friction law over |q̇| from `min_speed` to

@@ -10,6 +10,7 @@ use rand::{Rng, SeedableRng};
 
 use super::friction::FrictionCurve;
 use super::{joint_loop, master, parallel, GravityDesign, Settings, IDENTIFICATION_INTERNAL_STEP_S};
+use crate::identify::{gravity_pair, GravityCorrection, GravityOptions, PassFault, PassWindow};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{gravity_torques, inverse_dynamics_rnea_into, ArmData, ArmParams};
 use neurarm_physics::nn::{train, InputEncoding, Signal, TrainSettings, WeightsFile};
@@ -254,7 +255,17 @@ pub fn gravity_sweep(
     let half_window = (0.02 / h).round() as usize;
     let mut set_ref = vec![0.0; 2 * n];
     let mut read = vec![0.0; 3 * n];
-    let (mut velocity_data, mut velocity_torque) = (ArmData::new(&rigid_body), vec![0.0; n]);
+    // The pass pairs are judged and averaged by the code `neurarm identify gravity` runs on logs.
+    let options = GravityOptions {
+        speed_rad_s: SWEEP_SPEED,
+        share: STEADY_SHARE,
+        window_s: 2.0 * half_window as f64 * h,
+        ..GravityOptions::default()
+    };
+    let correction_terms = match correction {
+        Some(curves) => GravityCorrection { friction: curves, model: Some(&rigid_body) },
+        None => GravityCorrection::default(),
+    };
     let mut current = first.clone();
     let mut sweep = GravitySweep::default();
     for (index, point) in points.iter().enumerate() {
@@ -282,12 +293,9 @@ pub fn gravity_sweep(
                 }
             }
             let mut passes = Vec::with_capacity(2);
-            let mut steady = true;
             for direction in [1.0, -1.0] {
                 let from: Vec<f64> = point.iter().map(|q| q - direction * offset).collect();
-                // Angles, torques, and torques less the identified friction and velocity terms.
-                let mut sum = vec![0.0; 3 * n];
-                let mut count = 0;
+                let mut window = PassWindow::new(n);
                 for k in 1..=pass_steps {
                     for i in 0..n {
                         set_ref[i] = from[i] + direction * SWEEP_SPEED * k as f64 * h;
@@ -296,37 +304,25 @@ pub fn gravity_sweep(
                     step(&mut sim, &set_ref, &no_accel)?;
                     if k.abs_diff(pass_steps / 2) <= half_window {
                         sim.get_reals(&measured, &mut read).map_err(master)?;
-                        for i in 0..2 * n {
-                            sum[i] += read[i];
-                        }
-                        let (q, qd) = (&read[..n], &read[2 * n..]);
-                        steady &= qd.iter().all(|v| (v - direction * SWEEP_SPEED).abs() <= STEADY_SHARE * SWEEP_SPEED);
-                        match correction {
-                            Some(curves) => {
-                                inverse_dynamics_rnea_into(&rigid_body, &mut velocity_data, q, qd, &no_accel, &mut velocity_torque);
-                                for i in 0..n {
-                                    let friction = curves.get(i).map_or(0.0, |c| c.torque(qd[i]));
-                                    sum[2 * n + i] += read[n + i] - friction - velocity_torque[i];
-                                }
-                            }
-                            None => (0..n).for_each(|i| sum[2 * n + i] += read[n + i]),
-                        }
-                        count += 1;
+                        window.push(sim.time(), &read[..n], &read[2 * n..], &read[n..2 * n]);
                     }
                 }
-                passes.push(sum.iter().map(|x| x / count as f64).collect::<Vec<f64>>());
+                passes.push(window);
             }
             current = point.iter().map(|q| q - offset).collect();
-            if steady {
-                measured_pair = Some((0..3 * n).map(|j| 0.5 * (passes[0][j] + passes[1][j])).collect::<Vec<f64>>());
-                break;
+            match gravity_pair(&passes[0], &passes[1], &options, &correction_terms) {
+                Ok(m) => {
+                    measured_pair = Some(m);
+                    break;
+                }
+                Err(PassFault::UnsteadyUp | PassFault::UnsteadyDown) => sweep.repeated += 1,
+                Err(fault) => return Err(format!("pose {}: {}", index + 1, fault.reason())),
             }
-            sweep.repeated += 1;
         }
         match measured_pair {
-            Some(avg) => {
-                sweep.pairs.push((avg[..n].to_vec(), avg[2 * n..].to_vec()));
-                sweep.pairs_uncorrected.push((avg[..n].to_vec(), avg[n..2 * n].to_vec()));
+            Some(m) => {
+                sweep.pairs.push((m.q.clone(), m.torque));
+                sweep.pairs_uncorrected.push((m.q, m.torque_uncorrected));
                 sweep.pose_index.push(index);
             }
             None => sweep.dropped.push(point.iter().map(|q| q.rem_euclid(2.0 * PI)).collect()),

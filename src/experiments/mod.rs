@@ -26,7 +26,9 @@ use neurarm_models::{
 use neurarm_physics::arm::{gravity_torques, mass_matrix, ArmParams, ArmState};
 use neurarm_physics::config::ArmConfig;
 
-pub use friction::{bin_friction, friction_run, rest_pair, train_friction_net, FrictionHold, FrictionPair, FrictionRun};
+pub use friction::{
+    friction_run, held_inertia, pairs_of_runs, run_options, train_friction_net, FrictionHold, FrictionPair, FrictionRun, LevelRecord,
+};
 pub use gravity::{
     design_poses, gravity_grid, gravity_net_errors, gravity_sweep, measure_gravity, sampled_poses, train_gravity_net, GravityPair,
     GravitySweep, GRAVITY_SWEEP_SPEED_RAD_S,

@@ -329,14 +329,11 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     for (k, real) in [false, true].into_iter().enumerate() {
         for joint in 0..n {
             let mine: Vec<&FrictionRun> = runs.iter().zip(&tasks).filter(|(_, t)| t.0 == real && t.1 == joint).map(|(r, _)| r).collect();
-            let samples: Vec<(f64, f64)> = mine.iter().flat_map(|r| r.samples.iter().copied()).collect();
-            levels_of.push(mine.iter().map(|r| r.levels.len()).sum::<usize>());
-            let mut binned = bin_friction(&samples, settings.bin_width, settings.max_velocity);
-            if let Some(rest) = rest_pair(&mine) {
-                binned.retain(|b| b.0 != 0.0);
-                let at = binned.partition_point(|b| b.0 < 0.0);
-                binned.insert(at, rest);
-            }
+            let rigid = settings.friction_hold == FrictionHold::Rigid;
+            let inertia = rigid.then(|| held_inertia(model, joint));
+            let identified = pairs_of_runs(&mine, &run_options(settings, inertia));
+            levels_of.push(identified.kept());
+            let binned = identified.pairs;
             if binned.len() < 4 {
                 return Err(format!(
                     "friction identification, {} arm, joint {}: only {} training pairs",

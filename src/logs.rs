@@ -1,0 +1,244 @@
+//! From a robot's logs to a compensator FMU: the files of `neurarm identify` (pairs as CSV, the
+//! verdicts as JSON, a summary in words) and the whole path of `neurarm compensator`.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::experiments::{train_friction_net, train_gravity_net, Settings};
+use crate::export::export_fmu;
+use crate::identify::{
+    identify_friction_log, identify_gravity_log, FrictionCurve, FrictionIdentification, FrictionOptions, FrictionPair, GravityCorrection,
+    GravityIdentification, GravityOptions, LogColumns, RobotLog, Verdict,
+};
+use crate::table::{header_cell, write_atomic, write_text_atomic, NumericTable};
+use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
+use neurarm_physics::arm::ArmParams;
+use neurarm_physics::nn::InputEncoding;
+
+/// Writes joint `joint`'s (1-based) friction pairs: `qd_J [rad/s]`, `tau_friction_J [N.m]`,
+/// `samples`, and the identification's verdicts as JSON beside them (`.json`).
+pub fn write_friction_pairs(path: &Path, joint: usize, found: &FrictionIdentification) -> Result<(), String> {
+    let names = vec![header_cell(&format!("qd_{joint}"), "rad/s"), header_cell(&format!("tau_friction_{joint}"), "N.m"), "samples".into()];
+    let json = serde_json::to_string_pretty(&FrictionFile { joint, identification: found }).map_err(|e| e.to_string())?;
+    write_text_atomic(&report_path(path)?, &json)
+        .map_err(|e| format!("writing {}: {e}", report_path(path).unwrap_or_default().display()))?;
+    write_atomic(path, &names, found.pairs.iter().map(|p| vec![p.0, p.1, p.2 as f64]))
+        .map_err(|e| format!("writing {}: {e}", path.display()))
+}
+
+#[derive(Serialize)]
+struct FrictionFile<'a> {
+    joint: usize,
+    identification: &'a FrictionIdentification,
+}
+
+/// The JSON report beside a pairs file: same name, `.json`.
+pub fn report_path(pairs: &Path) -> Result<PathBuf, String> {
+    let report = pairs.with_extension("json");
+    if report == pairs {
+        return Err(format!("{}: give the pairs a .csv name (the report goes to a .json beside it)", pairs.display()));
+    }
+    Ok(report)
+}
+
+/// Reads friction pairs written by [`write_friction_pairs`] (any file with `qd_J` and
+/// `tau_friction_J` or `tau_J` columns): (joint, pairs by speed).
+pub fn read_friction_pairs(path: &Path) -> Result<(usize, Vec<FrictionPair>), String> {
+    let table = NumericTable::read(path, &[]).map_err(|e| e.to_string())?;
+    let speed = table
+        .names
+        .iter()
+        .find_map(|n| n.strip_prefix("qd_").and_then(|j| j.parse::<usize>().ok()))
+        .ok_or_else(|| format!("{}: no speed column qd_J (the header has: {})", path.display(), table.names.join(", ")))?;
+    let torque = [format!("tau_friction_{speed}"), format!("tau_{speed}")]
+        .into_iter()
+        .find(|n| table.column(n).is_some())
+        .ok_or_else(|| format!("{}: no torque column tau_friction_{speed} for qd_{speed}", path.display()))?;
+    let (v, t) = (table.column(&format!("qd_{speed}")).expect("found"), table.column(&torque).expect("found"));
+    let mut pairs: Vec<FrictionPair> = v.iter().zip(t).map(|(&v, &t)| (v, t, 1)).collect();
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Ok((speed, pairs))
+}
+
+/// What was kept and rejected, level by level, in words.
+pub fn friction_summary(joint: usize, found: &FrictionIdentification) -> String {
+    let mut text = String::new();
+    for (k, l) in found.levels.iter().enumerate() {
+        let mark = if l.verdict == Verdict::Kept { "kept" } else { "----" };
+        text += &format!(
+            "joint {joint} level {:>3} (t {:>8.2}–{:>8.2} s, line {:>7}): tau {:>+8.4} N·m, speed {:>+8.4} rad/s, drift {:.4} (limit {:.4}), spread {:.4} rad/s: {mark} {}\n",
+            k + 1,
+            l.start_s,
+            l.end_s,
+            l.line,
+            l.torque_nm,
+            l.speed_rad_s,
+            l.drift_rad_s,
+            l.drift_limit_rad_s,
+            l.spread_rad_s,
+            l.verdict.reason()
+        );
+    }
+    let rejected = found.levels.iter().filter(|l| !matches!(l.verdict, Verdict::Kept | Verdict::AtRest | Verdict::NoTorque)).count();
+    text += &format!(
+        "joint {joint}: {} levels kept, {} at rest, {rejected} rejected ({} rows of varying torque, the joint under control, ignored); {} pairs",
+        found.kept(),
+        found.levels.iter().filter(|l| l.verdict == Verdict::AtRest).count(),
+        found.ignored_rows,
+        found.pairs.len()
+    );
+    match &found.rest {
+        Some(r) => {
+            text += &format!(
+                ", the pair at rest {:+.4} N·m (midpoint of {:+.4} and {:+.4} N·m, the largest torques that left the joint at rest)\n",
+                r.torque_nm, r.positive_nm, r.negative_nm
+            )
+        }
+        None => text += "; no pair at rest: the log has no breakaway probe that left the joint at rest in both directions\n",
+    }
+    text
+}
+
+/// Writes gravity pairs: `q_i [rad]`, `tau_gravity_i [N.m]` (corrected), `tau_plain_i [N.m]` (the
+/// plain average), and the poses' verdicts as JSON beside them.
+pub fn write_gravity_pairs(path: &Path, found: &GravityIdentification) -> Result<(), String> {
+    let n = found.pairs.first().map_or(0, |p| p.q.len());
+    let mut names: Vec<String> = (1..=n).map(|i| header_cell(&format!("q_{i}"), "rad")).collect();
+    names.extend((1..=n).map(|i| header_cell(&format!("tau_gravity_{i}"), "N.m")));
+    names.extend((1..=n).map(|i| header_cell(&format!("tau_plain_{i}"), "N.m")));
+    let json = serde_json::to_string_pretty(found).map_err(|e| e.to_string())?;
+    let report = report_path(path)?;
+    write_text_atomic(&report, &json).map_err(|e| format!("writing {}: {e}", report.display()))?;
+    write_atomic(path, &names, found.pairs.iter().map(|p| [p.q.clone(), p.torque.clone(), p.torque_uncorrected.clone()].concat()))
+        .map_err(|e| format!("writing {}: {e}", path.display()))
+}
+
+/// What became of the poses, in words.
+pub fn gravity_summary(found: &GravityIdentification) -> String {
+    let mut text = String::new();
+    for p in found.poses.iter().filter(|p| p.refused.is_some()) {
+        let q: Vec<String> = p.q.iter().map(|v| format!("{v:.3}")).collect();
+        text += &format!("pose at ({}) rad, line {}: refused, {}\n", q.join(", "), p.line, p.refused.as_deref().unwrap_or(""));
+    }
+    text += &format!(
+        "{} passes, {} poses found, {} pairs kept, {} refused\n",
+        found.passes,
+        found.poses.len(),
+        found.pairs.len(),
+        found.poses.len() - found.pairs.len()
+    );
+    text
+}
+
+/// The inputs of [`compensator_from_logs`].
+#[derive(Clone, Debug)]
+pub struct CompensatorJob {
+    /// Log of the friction plan (every joint's runs).
+    pub friction_log: PathBuf,
+    /// Log of the gravity plan, if gravity is to be compensated.
+    pub gravity_log: Option<PathBuf>,
+    /// Column names of both logs.
+    pub columns: LogColumns,
+    /// How friction levels are judged.
+    pub friction: FrictionOptions,
+    /// How gravity passes are found.
+    pub gravity: GravityOptions,
+    /// A rigid-body model of the arm, to take the velocity terms out of the gravity passes.
+    pub model: Option<ArmParams>,
+    /// Folder for every intermediate file (pairs, reports, nets).
+    pub work: PathBuf,
+    /// The FMU to write.
+    pub output: PathBuf,
+    /// Its model identifier.
+    pub identifier: String,
+    /// Seed of the trainings.
+    pub seed: u64,
+}
+
+/// What [`compensator_from_logs`] made.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompensatorSummary {
+    /// Joints.
+    pub joints: usize,
+    /// Friction pairs per joint.
+    pub friction_pairs: Vec<usize>,
+    /// Gravity pairs.
+    pub gravity_pairs: Option<usize>,
+    /// Every file written, the FMU last.
+    pub files: Vec<PathBuf>,
+}
+
+/// Identifies, trains and exports: friction pairs and a net per joint from the friction log,
+/// gravity pairs (the friction pairs' curves and the model's velocity terms taken out) and the
+/// periodic link-angle net from the gravity log, then the `NnCompensator` FMU. Every file but the
+/// FMU goes to `work`. Nothing is written to `output` unless everything succeeded.
+pub fn compensator_from_logs(job: &CompensatorJob, say: &mut dyn FnMut(&str)) -> Result<CompensatorSummary, String> {
+    job.columns.check()?;
+    std::fs::create_dir_all(&job.work).map_err(|e| format!("{}: {e}", job.work.display()))?;
+    let probe = RobotLog::read_all(&job.friction_log, &job.columns, None).map_err(|e| e.to_string())?;
+    let n = probe.joints.len();
+    if let Some(model) = &job.model {
+        if model.dof() != n {
+            return Err(format!("{}: the log has {n} joints, the arm has {}", job.friction_log.display(), model.dof()));
+        }
+    }
+    let settings = Settings { seed: job.seed, ..Settings::paper() };
+    let mut files = Vec::new();
+    let mut curves = Vec::new();
+    let mut friction_pairs = Vec::new();
+    let mut sources = Vec::new();
+    for joint in 1..=n {
+        let found = identify_friction_log(&probe, joint, &job.friction).map_err(|e| format!("friction: {e}"))?;
+        say(friction_summary(joint, &found).lines().last().unwrap_or(""));
+        if found.pairs.len() < 4 {
+            return Err(format!("friction of joint {joint}: only {} pairs from {}", found.pairs.len(), job.friction_log.display()));
+        }
+        let pairs_path = job.work.join(format!("friction_{joint}.csv"));
+        write_friction_pairs(&pairs_path, joint, &found)?;
+        files.extend([pairs_path.clone(), report_path(&pairs_path)?]);
+        say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
+        let net = train_friction_net(joint - 1, &found.pairs, job.seed)?;
+        let net_path = job.work.join(format!("friction_{joint}.json"));
+        write_text_atomic(&net_path, &net.to_json()).map_err(|e| format!("writing {}: {e}", net_path.display()))?;
+        files.push(net_path.clone());
+        sources.push((format!("friction_{joint}.json"), net_path));
+        friction_pairs.push(found.pairs.len());
+        curves.push(FrictionCurve::new(&found.pairs));
+    }
+    let mut gravity_pairs = None;
+    if let Some(log) = &job.gravity_log {
+        let log = RobotLog::read_all(log, &job.columns, Some(n)).map_err(|e| e.to_string())?;
+        let rigid = job.model.as_ref().map(|m| m.clone().with_base_angle(0.0).frictionless());
+        let correction = GravityCorrection { friction: &curves, model: rigid.as_ref() };
+        let found = identify_gravity_log(&log, &job.gravity, &correction).map_err(|e| format!("gravity: {e}"))?;
+        say(gravity_summary(&found).lines().last().unwrap_or(""));
+        let pairs_path = job.work.join("gravity.csv");
+        write_gravity_pairs(&pairs_path, &found)?;
+        files.extend([pairs_path.clone(), report_path(&pairs_path)?]);
+        let pairs: Vec<(Vec<f64>, Vec<f64>)> = found.pairs.iter().map(|p| (p.q.clone(), p.torque.clone())).collect();
+        if pairs.len() < 10 {
+            return Err(format!("gravity: only {} pairs from {}; the net needs at least 10 poses", pairs.len(), log.path.display()));
+        }
+        say(&format!("training the gravity net on {} pairs", pairs.len()));
+        let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, &mut |_| {})?;
+        let net_path = job.work.join("gravity.json");
+        write_text_atomic(&net_path, &net.to_json()).map_err(|e| format!("writing {}: {e}", net_path.display()))?;
+        files.push(net_path.clone());
+        sources.push(("gravity.json".into(), net_path));
+        gravity_pairs = Some(pairs.len());
+    }
+    let spec = FmuSpec {
+        identifier: job.identifier.clone(),
+        model: ModelSpec::NnCompensator(NnCompensatorSpec {
+            joints: n,
+            friction: (1..=n).map(|i| format!("friction_{i}.json")).collect(),
+            gravity: gravity_pairs.map(|_| "gravity.json".to_owned()),
+            enable_friction: true,
+            enable_gravity: gravity_pairs.is_some(),
+        }),
+    };
+    export_fmu(&spec, &sources, &job.output)?;
+    files.push(job.output.clone());
+    Ok(CompensatorSummary { joints: n, friction_pairs, gravity_pairs, files })
+}
