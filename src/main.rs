@@ -55,6 +55,10 @@ enum Command {
         /// With --plan: write every K-th step only.
         #[arg(long, default_value_t = 1, requires = "plan", value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
         every: u64,
+        /// With --plan: write what a robot logs, time and the measured q_i, qd_i with tau_i, each
+        /// rounded to 1e-6 (rad, rad/s, N·m).
+        #[arg(long, requires = "plan")]
+        robot_log: bool,
         /// The arm's base angle [rad] instead of the configuration's (π/2: gravity in the plane).
         #[arg(long, allow_hyphen_values = true)]
         base_angle: Option<f64>,
@@ -354,7 +358,7 @@ enum IdentifyCommand {
         #[arg(long, default_value_t = 0.25)]
         speed: f64,
         /// Measuring window at the middle of each pass [s].
-        #[arg(long, default_value_t = 0.2)]
+        #[arg(long, default_value_t = 0.5)]
         window: f64,
         /// Output pairs (.csv).
         #[arg(long, short = 'o')]
@@ -603,7 +607,7 @@ fn run(cli: Cli) -> Result<()> {
             );
             eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
         }
-        Command::Simulate { plan: Some(plan), arm, output, step, every, base_angle, .. } => {
+        Command::Simulate { plan: Some(plan), arm, output, step, every, base_angle, robot_log, .. } => {
             let (mut config, initial) = arm.load()?;
             if let Some(angle) = base_angle {
                 config.arm = config.arm.with_base_angle(angle);
@@ -613,7 +617,10 @@ fn run(cli: Cli) -> Result<()> {
             }
             let plan = neurarm::simulate::Plan::read_csv(&plan, config.arm.dof())?;
             let initial = ArmState { q: plan.start(&initial.q), qd: initial.qd };
-            let trajectory = neurarm::simulate::simulate_plan(&config, &initial, &plan, step, every as usize)?;
+            let mut trajectory = neurarm::simulate::simulate_plan(&config, &initial, &plan, step, every as usize)?;
+            if robot_log {
+                trajectory = trajectory.as_robot_log();
+            }
             let rows = trajectory.rows.len();
             write_atomic(&output, &trajectory.names, trajectory.rows.into_iter())
                 .with_context(|| format!("writing {}", output.display()))?;

@@ -226,7 +226,7 @@ pub struct GravityPlanSettings {
     /// Speed of every joint in a pass [rad/s].
     pub speed_rad_s: f64,
     /// Duration of each pass [s] (2 s: the controller settles on the pass speed in its first
-    /// part, and the identification averages 0.2 s at its middle).
+    /// part, and the identification averages 0.5 s at its middle).
     pub pass_s: f64,
     /// Seed of a sampled design.
     pub seed: u64,

@@ -51,6 +51,33 @@ pub struct Trajectory {
     pub rows: Vec<Vec<f64>>,
 }
 
+impl Trajectory {
+    /// What a robot logs of this trajectory: `time`, and per joint the measured angle and speed
+    /// (`q_meas_i`, `qd_meas_i` when present, else the true ones) as `q_i`, `qd_i`, and `tau_i`;
+    /// time rounded to 1 ns, the rest to 1e-6 (a log's resolution, far below the sensors' noise).
+    pub fn as_robot_log(&self) -> Trajectory {
+        let n = self.names.iter().filter(|c| c.starts_with("tau_")).count();
+        let find = |name: &str| self.names.iter().position(|c| c == name);
+        let mut names = vec!["time".to_owned()];
+        let mut source = vec![find("time").expect("a trajectory has time")];
+        for prefix in ["q", "qd", "tau"] {
+            for i in 0..n {
+                let plain = joint_column(prefix, i);
+                source.push(find(&format!("{prefix}_meas_{}", i + 1)).or_else(|| find(&plain)).expect("a trajectory has every joint"));
+                names.push(plain);
+            }
+        }
+        // Dividing by the power of ten gives the double nearest the decimal, which prints short.
+        let round = |v: f64, scale: f64| (v * scale).round() / scale;
+        let rows = self
+            .rows
+            .iter()
+            .map(|row| source.iter().enumerate().map(|(k, &c)| round(row[c], if k == 0 { 1e9 } else { 1e6 })).collect())
+            .collect();
+        Trajectory { names, rows }
+    }
+}
+
 /// Simulates the configured arm from `initial` under `input`.
 pub fn simulate(config: &ArmConfig, initial: &ArmState, input: &TorqueInput) -> Result<Trajectory, SimulateError> {
     let n = config.arm.dof();

@@ -68,10 +68,7 @@ impl NumericTable {
             column,
             message,
         };
-        let mut reader = csv::ReaderBuilder::new()
-            .trim(csv::Trim::All)
-            .from_path(path)
-            .map_err(|e| err(None, None, format!("cannot open: {}", csv_cause(&e))))?;
+        let mut reader = csv_reader(path).map_err(|e| err(None, None, format!("cannot open: {e}")))?;
         let (names, units): (Vec<String>, Vec<Option<String>>) = reader
             .headers()
             .map_err(|e| err(Some(1), None, format!("cannot read the header: {}", csv_cause(&e))))?
@@ -160,6 +157,17 @@ impl NumericTable {
         }
         Ok(())
     }
+}
+
+/// A CSV reader of `path`, decompressing a `.gz` file on the fly (logs are large).
+pub(crate) fn csv_reader(path: &Path) -> std::io::Result<csv::Reader<Box<dyn std::io::Read>>> {
+    let file = std::fs::File::open(path)?;
+    let source: Box<dyn std::io::Read> = if path.extension().is_some_and(|e| e == "gz") {
+        Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file)))
+    } else {
+        Box::new(file)
+    };
+    Ok(csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(source))
 }
 
 /// A header cell as (name, unit): `qd_1 [rad/s]` is (`qd_1`, `rad/s`); a cell without brackets

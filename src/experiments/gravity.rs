@@ -260,6 +260,8 @@ pub fn gravity_sweep(
         speed_rad_s: SWEEP_SPEED,
         share: STEADY_SHARE,
         window_s: 2.0 * half_window as f64 * h,
+        // Noise-free 1 kHz samples: a short average still sees a joint that sticks.
+        smoothing_s: 0.01,
         ..GravityOptions::default()
     };
     let correction_terms = match correction {

@@ -13,8 +13,9 @@ use super::RobotLog;
 ///
 /// **Steady.** Over the measuring window (the last `window_s` of a level) a straight line
 /// v(t) = a + s·t is fitted to the joint's speed. The level is steady when its drift |s|·window
-/// is at most `drift_rad_s` plus three standard errors of that drift (so sensor noise alone
-/// does not reject a level), and the RMS of the speed about the line (its spread) is at most
+/// is at most `drift_rad_s` plus three standard errors of that drift, the latter capped at
+/// `drift_rad_s` (so sensor noise alone rarely rejects a level, and never lets a decelerating
+/// one through), and the RMS of the speed about the line (its spread) is at most
 /// `spread_rad_s` or 10 % of the mean speed, whichever is larger (stick–slip and oscillation
 /// have a large spread). A level at rest (|mean speed| below `rest_speed_rad_s`) is a
 /// breakaway probe, not a pair.
@@ -207,7 +208,9 @@ pub fn window_trend(time: &[f64], speed: &[f64], drift_allowed: f64) -> (f64, f6
     let spread = (residual / n).sqrt();
     let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
     let slope_error = if stt > 0.0 && n > 2.0 { (residual / (n - 2.0) / stt).sqrt() } else { f64::INFINITY };
-    (v_mean, slope.abs() * span, drift_allowed + 3.0 * slope_error * span, spread, slope)
+    // Noise widens the limit by at most the allowed drift itself: a sparse or noisy log cannot
+    // let a level that is still slowing down pass as steady.
+    (v_mean, slope.abs() * span, drift_allowed + (3.0 * slope_error * span).min(drift_allowed), spread, slope)
 }
 
 /// Judges one level (see [`FrictionOptions`]).

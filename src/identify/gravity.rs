@@ -25,8 +25,9 @@ pub struct GravityOptions {
     pub speed_rad_s: f64,
     /// Largest deviation of a smoothed speed from the pass speed, as a share of it.
     pub share: f64,
-    /// Measuring window at the middle of a pass [s]: 0.2 s for logs, whose torques carry the
-    /// controller's response to sensor noise (the paper's noise-free sweeps: 40 ms).
+    /// Measuring window at the middle of a pass [s]: 0.5 s for logs (a quarter of the plan's
+    /// 2 s passes), whose torques carry the controller's response to sensor noise; the paper's
+    /// noise-free sweeps take 40 ms.
     pub window_s: f64,
     /// Moving average of the speeds for the steadiness test [s].
     pub smoothing_s: f64,
@@ -38,7 +39,7 @@ pub struct GravityOptions {
 
 impl Default for GravityOptions {
     fn default() -> Self {
-        Self { speed_rad_s: 0.25, share: 0.2, window_s: 0.2, smoothing_s: 0.01, pose_tolerance_rad: 0.05, min_pass_s: 0.1 }
+        Self { speed_rad_s: 0.25, share: 0.2, window_s: 0.5, smoothing_s: 0.05, pose_tolerance_rad: 0.05, min_pass_s: 0.1 }
     }
 }
 

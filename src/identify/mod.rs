@@ -182,8 +182,7 @@ fn table_error(path: &Path, line: Option<u64>, message: String) -> TableError {
 
 /// The header's column names (units stripped).
 fn header_names(path: &Path) -> Result<Vec<String>, TableError> {
-    let mut reader =
-        csv::ReaderBuilder::new().trim(csv::Trim::All).from_path(path).map_err(|e| table_error(path, None, format!("cannot open: {e}")))?;
+    let mut reader = crate::table::csv_reader(path).map_err(|e| table_error(path, None, format!("cannot open: {e}")))?;
     let header = reader.headers().map_err(|e| table_error(path, Some(1), format!("cannot read the header: {e}")))?;
     Ok(header.iter().map(|c| crate::table::split_unit(c).0).collect())
 }
