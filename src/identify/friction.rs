@@ -249,10 +249,10 @@ pub fn judge_level(level: &Level<'_>, options: &FrictionOptions) -> LevelReport 
         }
     } else if mean * torque_nm <= 0.0 {
         Verdict::AgainstTorque
-    } else if drift > limit {
-        Verdict::Drifting
     } else if spread > options.spread_rad_s.max(0.1 * mean.abs()) {
         Verdict::Spread
+    } else if drift > limit {
+        Verdict::Drifting
     } else {
         Verdict::Kept
     };
