@@ -195,11 +195,12 @@ pub fn report_markdown(run: &PaperRun) -> String {
     let _ = writeln!(
         s,
         "Constant torques on one joint, the others held rigidly by computed torque from the nominal rigid-body model (see \
-         `FrictionHold::Rigid`), raised level by level until the speed passes {1} rad/s; each level's torque corrected by the fitted \
+         `FrictionHold::Rigid`), raised level by level until the speed passes {1} rad/s, each level lasting until its last 0.5 s is steady by \
+         the test `neurarm identify friction` applies to logs; each level's torque corrected by the fitted \
          acceleration (friction = τ − H_ff q̈); below the first moving level, where constant torques cannot hold a Stribeck joint, \
-         speed-controlled levels down to {0} rad/s. Samples binned by {0} \
-         rad/s over ±{1} rad/s; mean torque per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway \
-         torques; see `rest_pair`). The pairs and nets are checked against the true law of the arm they were measured on: pair error \
+         speed-controlled levels down to {0} rad/s. The steady levels binned by {0} \
+         rad/s at their mean speeds; mean friction per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway \
+         torques; see `neurarm::identify::identify_levels`). The pairs and nets are checked against the true law of the arm they were measured on: pair error \
          is the largest |pair − law| over the moving pairs, net error the RMS of net − law over {2} ≤ |q̇| ≤ {3} rad/s, also as a share \
          of the joint's largest friction torque. Data: `data/friction_*_joint*.csv`; nets: `nets/friction_*.json`.\n",
         settings.bin_width, settings.max_velocity, 0.2, settings.max_velocity
