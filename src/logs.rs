@@ -14,7 +14,7 @@ use crate::identify::{
 use crate::table::{header_cell, write_atomic, write_text_atomic, NumericTable};
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
 use neurarm_physics::arm::ArmParams;
-use neurarm_physics::nn::InputEncoding;
+use neurarm_physics::nn::{EpochInfo, InputEncoding};
 
 /// Writes joint `joint`'s (1-based) friction pairs: `qd_J [rad/s]`, `tau_friction_J [N.m]`,
 /// `samples`, and the identification's verdicts as JSON beside them (`.json`).
@@ -181,8 +181,13 @@ pub struct CompensatorSummary {
 /// Identifies, trains and exports: friction pairs and a net per joint from the friction log,
 /// gravity pairs (the friction pairs' curves and the model's velocity terms taken out) and the
 /// periodic link-angle net from the gravity log, then the `NnCompensator` FMU. Every file but the
-/// FMU goes to `work`. Nothing is written to `output` unless everything succeeded.
-pub fn compensator_from_logs(job: &CompensatorJob, say: &mut dyn FnMut(&str)) -> Result<CompensatorSummary, String> {
+/// FMU goes to `work`. Nothing is written to `output` unless everything succeeded. `say` gets
+/// each step's summary line, `on_epoch` every epoch of the gravity net's fit (the long one).
+pub fn compensator_from_logs(
+    job: &CompensatorJob,
+    say: &mut dyn FnMut(&str),
+    on_epoch: &mut dyn FnMut(&EpochInfo<'_>),
+) -> Result<CompensatorSummary, String> {
     job.columns.check()?;
     std::fs::create_dir_all(&job.work).map_err(|e| format!("{}: {e}", job.work.display()))?;
     let probe = RobotLog::read_all(&job.friction_log, &job.columns, None).map_err(|e| e.to_string())?;
@@ -232,7 +237,7 @@ pub fn compensator_from_logs(job: &CompensatorJob, say: &mut dyn FnMut(&str)) ->
         let hidden = gravity_hidden(pairs.len(), n);
         say(&format!("training the gravity net ({hidden} hidden neurons) on {} pairs", pairs.len()));
         let settings = Settings { gravity_hidden: hidden, ..settings.clone() };
-        let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, &mut |_| {})?;
+        let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch)?;
         let net_path = job.work.join("gravity.json");
         write_text_atomic(&net_path, &net.to_json()).map_err(|e| format!("writing {}: {e}", net_path.display()))?;
         files.push(net_path.clone());

@@ -17,7 +17,7 @@ use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
 use neurarm_physics::nn::lm::Damping;
-use neurarm_physics::nn::{train, InputEncoding, Signal, TrainSettings, WeightsFile};
+use neurarm_physics::nn::{train, InputEncoding, NetKind, Signal, TrainSettings, WeightsFile};
 use std::io::IsTerminal;
 
 #[derive(Parser)]
@@ -200,9 +200,20 @@ enum Command {
         /// Validation failures in a row that stop training.
         #[arg(long, default_value_t = 6)]
         max_fail: usize,
-        /// Train/validation/test fractions, comma-separated.
-        #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [0.70, 0.15, 0.15])]
+        /// Train/validation/test fractions summing to 1: `0.7,0.15,0.15` or `0.7 0.15 0.15`.
+        /// Each part used needs a few samples (training 10, validation and test 3 each:
+        /// 17 samples at the default split).
+        #[arg(long, value_delimiter = ',', num_args = 1..=3, default_values_t = [0.70, 0.15, 0.15])]
         split: Vec<f64>,
+        /// What the net computes, recorded in the weights file so that `export compensator`
+        /// can check it: friction (one joint's torque from its velocity), gravity (all joints'
+        /// torques from all angles) or unspecified. Inferred when omitted: one input `qd_J` →
+        /// friction of joint J; inputs `q_1…q_n` and n targets → gravity; else unspecified.
+        #[arg(long, value_parser = parse_kind)]
+        kind: Option<NetKind>,
+        /// The joint (1-based) of a friction net; inferred from an input named `qd_J`.
+        #[arg(long)]
+        joint: Option<usize>,
         /// How the net sees the inputs: raw, joint-angles ((cos, sin) of each input angle
         /// [rad]) or link-angles ((cos, sin) of the running sums q₁+…+qⱼ); the angle forms are
         /// 2π-periodic in every input.
@@ -734,8 +745,12 @@ fn run(cli: Cli) -> Result<()> {
                 identifier,
                 seed,
             };
+            let bar = EpochBar::new(None);
             let summary =
-                neurarm::logs::compensator_from_logs(&job, &mut |line| eprintln!("[compensator] {line}")).map_err(anyhow::Error::msg)?;
+                neurarm::logs::compensator_from_logs(&job, &mut |line| bar.println(&format!("[compensator] {line}")), &mut |e| bar.show(e))
+                    .map_err(anyhow::Error::msg);
+            bar.finish();
+            let summary = summary?;
             eprintln!(
                 "wrote {} ({} joints; friction pairs {:?}, gravity pairs {}); intermediate files in {}",
                 output.display(),
@@ -745,22 +760,52 @@ fn run(cli: Cli) -> Result<()> {
                 work.display()
             );
         }
-        Command::Train { data, inputs, targets, hidden, restarts, seed, epochs, max_fail, split, encoding, damping, output } => {
-            let split = [split[0], split[1], split[2]];
-            let settings = TrainSettings { hidden, restarts, seed, epochs, max_fail, split, damping, ..Default::default() };
+        Command::Train {
+            data,
+            inputs,
+            targets,
+            hidden,
+            restarts,
+            seed,
+            epochs,
+            max_fail,
+            split,
+            kind,
+            joint,
+            encoding,
+            damping,
+            output,
+        } => {
+            let [a, b, c] = split[..] else {
+                bail!("--split takes three fractions (train, validation, test), e.g. 0.7,0.15,0.15; got {}", split.len())
+            };
+            let settings = TrainSettings { hidden, restarts, seed, epochs, max_fail, split: [a, b, c], damping, ..Default::default() };
+            let (kind, joint) = net_kind(kind, joint, &inputs, &targets)?;
             let weights = train_from_csv(&data, &inputs, &targets, encoding, settings)?;
+            let weights = match kind {
+                NetKind::Friction => weights.friction_of_joint(joint.expect("a friction net has a joint")),
+                NetKind::Gravity => weights.gravity(),
+                NetKind::Unspecified => weights,
+            };
+            weights.network().map_err(|e| anyhow::anyhow!("--kind {}: {e}", kind.name()))?;
             write_text_atomic(&output, &weights.to_json()).with_context(|| format!("writing {}", output.display()))?;
             let r = &weights.report;
-            let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
+            let rms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.3e}", v.sqrt()));
+            let unit = weights.outputs[0].unit.as_str();
             eprintln!(
-                "wrote {}: {} epochs (best {}), stopped by {:?}; MSE train {:.3e}, validation {}, test {} [target units²]",
+                "wrote {} ({}): {} epochs (best {}), stopped by {}; RMS error train {}, validation {}, test {} [{}] on {}/{}/{} samples",
                 output.display(),
+                weights.describe(),
                 r.epochs,
                 r.best_epoch,
-                r.stop_reason,
-                r.train_mse,
-                opt(r.validation_mse),
-                opt(r.test_mse)
+                stop_reason_text(r.stop_reason),
+                rms(Some(r.train_mse)),
+                rms(r.validation_mse),
+                rms(r.test_mse),
+                if unit.is_empty() { "target units" } else { unit },
+                r.counts[0],
+                r.counts[1],
+                r.counts[2]
             );
         }
         Command::Eval { net, data, output } => {
@@ -800,13 +845,22 @@ fn run(cli: Cli) -> Result<()> {
             let friction = friction.unwrap_or_default();
             let gravity = gravity.flatten();
             let identifier = identifier_for(name, &output, "NnCompensator");
-            let joints = if !friction.is_empty() {
-                friction.len()
-            } else if let Some(g) = &gravity {
-                WeightsFile::read(g)?.inputs.len()
-            } else {
+            if friction.is_empty() && gravity.is_none() {
                 bail!("give --friction nets, a --gravity net, or both (or --ideal for the arm's true torques)");
-            };
+            }
+            // Checked here, by the user's file names, before anything is packed.
+            let friction_files = friction.iter().map(|p| WeightsFile::read(p)).collect::<Result<Vec<_>, _>>()?;
+            let gravity_file = gravity.as_ref().map(|g| WeightsFile::read(g)).transpose()?;
+            let names: Vec<String> = friction.iter().chain(&gravity).map(|p| p.display().to_string()).collect();
+            let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(&friction_files).collect();
+            let joints =
+                neurarm_models::check_compensator_nets(&named, names.get(friction.len()).map(String::as_str).zip(gravity_file.as_ref()))
+                    .map_err(anyhow::Error::msg)?;
+            for (name, file) in names.iter().zip(friction_files.iter().chain(&gravity_file)) {
+                if file.kind == NetKind::Unspecified {
+                    eprintln!("notice: {name} records no kind (trained before weights version 3, or with --kind unspecified): checked by its shape and names only");
+                }
+            }
             let mut sources: Vec<(String, PathBuf)> =
                 friction.iter().enumerate().map(|(i, p)| (format!("friction_{}.json", i + 1), p.clone())).collect();
             if let Some(g) = &gravity {
@@ -909,7 +963,52 @@ fn unit_of(name: &str) -> String {
     unit.to_owned()
 }
 
-/// Reads the pairs, trains with a progress bar on a terminal, and wraps the result.
+/// Training progress on a terminal (restart, epoch, errors, μ); nothing otherwise.
+struct EpochBar {
+    bar: ProgressBar,
+    epochs: usize,
+}
+
+impl EpochBar {
+    /// A bar over `epochs × restarts` epochs, or a counter when the length is not known.
+    fn new(length: Option<(usize, usize)>) -> Self {
+        let terminal = std::io::stderr().is_terminal();
+        let (bar, epochs) = match (terminal, length) {
+            (false, _) => (ProgressBar::hidden(), 0),
+            (true, Some((epochs, restarts))) => (ProgressBar::new(epochs.saturating_mul(restarts) as u64), epochs),
+            (true, None) => (ProgressBar::new_spinner(), 0),
+        };
+        let template = if length.is_some() { "{bar:30} restart {prefix} {msg}" } else { "{spinner} training: restart {prefix} {msg}" };
+        bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
+        Self { bar, epochs }
+    }
+
+    /// Shows one epoch (errors in scaled units, as the trainer sees them).
+    fn show(&self, e: &neurarm_physics::nn::EpochInfo<'_>) {
+        self.bar.set_prefix((e.restart + 1).to_string());
+        if self.epochs > 0 {
+            self.bar.set_position((e.restart * self.epochs + e.epoch) as u64);
+        } else {
+            self.bar.tick();
+        }
+        self.bar.set_message(format!("epoch {} MSE {:.3e} val {:.3e} mu {:.0e} (scaled)", e.epoch, e.train_mse, e.validation_mse, e.mu));
+    }
+
+    /// A line above the bar.
+    fn println(&self, line: &str) {
+        if self.bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            self.bar.println(line);
+        }
+    }
+
+    fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+/// Reads the pairs, checks them, trains with progress on a terminal, and wraps the result.
 fn train_from_csv(
     data: &std::path::Path,
     inputs: &[String],
@@ -918,25 +1017,47 @@ fn train_from_csv(
     settings: TrainSettings,
 ) -> Result<WeightsFile> {
     let required: Vec<&str> = inputs.iter().chain(targets).map(String::as_str).collect();
+    if let Some(name) = required.iter().enumerate().find_map(|(i, n)| required[..i].contains(n).then_some(n)) {
+        bail!("column '{name}' is named twice in --inputs/--targets");
+    }
     let table = NumericTable::read(data, &required)?;
+    for name in inputs {
+        let column = table.column(name).expect("required");
+        if column.iter().all(|&v| v == column[0]) {
+            bail!(
+                "{}: input column '{name}' is constant ({} in all {} rows): it carries nothing to learn from",
+                data.display(),
+                column[0],
+                table.rows()
+            );
+        }
+    }
     let matrix = |names: &[String]| {
         let cols: Vec<&[f64]> = names.iter().map(|n| table.column(n).expect("required")).collect();
         DMatrix::from_fn(names.len(), table.rows(), |r, c| cols[r][c])
     };
-    let (x, t) = (encoding.encode_all(&matrix(inputs)), matrix(targets));
-    let bar = if std::io::stderr().is_terminal() {
-        ProgressBar::new((settings.epochs * settings.restarts) as u64)
-    } else {
-        ProgressBar::hidden()
+    let raw = matrix(inputs);
+    neurarm_physics::nn::lm::check_settings(&settings, encoding.features(inputs.len()), targets.len(), table.rows())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", data.display()))?;
+    if let Some(warning) = neurarm_physics::nn::lm::time_series_warning(&raw) {
+        eprintln!("warning: {}: {warning}", data.display());
+    }
+    let weights = neurarm_physics::nn::lm::weight_count(encoding.features(inputs.len()), settings.hidden, targets.len()).unwrap_or(0);
+    if weights > table.rows() * 7 / 10 * targets.len() {
+        eprintln!(
+            "notice: the net has {weights} weights for about {} training target values: it can fit noise; validation stopping is what holds it",
+            table.rows() * 7 / 10 * targets.len()
+        );
+    }
+    let (x, t) = (encoding.encode_all(&raw), matrix(targets));
+    let bar = EpochBar::new(Some((settings.epochs, settings.restarts)));
+    let trained = train(&x, &t, &settings, &mut |e| bar.show(e));
+    bar.finish();
+    let trained = trained?;
+    // A unit in the header (`qd_1 [rad/s]`) is the unit; otherwise it is guessed from the name.
+    let signals = |names: &[String]| {
+        names.iter().map(|n| Signal { name: n.clone(), unit: table.unit(n).map_or_else(|| unit_of(n), str::to_owned) }).collect()
     };
-    bar.set_style(ProgressStyle::with_template("{bar:30} restart {prefix} {msg}").expect("valid template"));
-    let trained = train(&x, &t, &settings, &mut |e| {
-        bar.set_prefix((e.restart + 1).to_string());
-        bar.set_position((e.restart * settings.epochs + e.epoch) as u64);
-        bar.set_message(format!("epoch {} MSE {:.3e} val {:.3e} mu {:.0e}", e.epoch, e.train_mse, e.validation_mse, e.mu));
-    })?;
-    bar.finish_and_clear();
-    let signals = |names: &[String]| names.iter().map(|n| Signal { name: n.clone(), unit: unit_of(n) }).collect();
     Ok(WeightsFile::new(&trained.net, signals(inputs), signals(targets), settings, trained.report).with_encoding(encoding))
 }
 
@@ -946,6 +1067,71 @@ fn parse_damping(text: &str) -> std::result::Result<Damping, String> {
         "trainlm" => Ok(Damping::Trainlm),
         "nielsen" => Ok(Damping::Nielsen),
         other => Err(format!("unknown damping '{other}': use trainlm or nielsen")),
+    }
+}
+
+/// Parses a net kind for clap.
+fn parse_kind(text: &str) -> std::result::Result<NetKind, String> {
+    NetKind::parse(text)
+}
+
+/// A stop reason as words.
+fn stop_reason_text(reason: neurarm_physics::nn::StopReason) -> &'static str {
+    use neurarm_physics::nn::StopReason::*;
+    match reason {
+        Epochs => "the epoch limit",
+        Goal => "the error goal",
+        MinGradient => "a vanishing gradient",
+        MuMax => "mu reaching its limit",
+        ValidationFailures => "validation failures",
+    }
+}
+
+/// The joint J of a column named `<prefix>J`.
+fn joint_of(name: &str, prefix: &str) -> Option<usize> {
+    name.strip_prefix(prefix)?.parse().ok().filter(|&j| j >= 1)
+}
+
+/// The kind and joint of a net to be trained: as given, or inferred from the column names
+/// (documented on `train --kind`).
+fn net_kind(kind: Option<NetKind>, joint: Option<usize>, inputs: &[String], targets: &[String]) -> Result<(NetKind, Option<usize>)> {
+    let friction_joint = match inputs {
+        [only] if targets.len() == 1 => joint_of(only, "qd_"),
+        _ => None,
+    };
+    let is_gravity = inputs.len() == targets.len() && inputs.iter().enumerate().all(|(i, n)| joint_of(n, "q_") == Some(i + 1));
+    let kind = kind.unwrap_or(if friction_joint.is_some() || joint.is_some() {
+        NetKind::Friction
+    } else if is_gravity {
+        NetKind::Gravity
+    } else {
+        NetKind::Unspecified
+    });
+    match kind {
+        NetKind::Friction => {
+            if inputs.len() != 1 || targets.len() != 1 {
+                bail!(
+                    "a friction net has one input (the joint's velocity) and one target (its torque), not {} and {}",
+                    inputs.len(),
+                    targets.len()
+                );
+            }
+            match (joint, friction_joint) {
+                (Some(0), _) => bail!("--joint 0: joints are numbered from 1"),
+                (Some(j), Some(named)) if j != named => {
+                    bail!("--joint {j} but the input is '{}', the velocity of joint {named}", inputs[0])
+                }
+                (Some(j), _) | (None, Some(j)) => Ok((kind, Some(j))),
+                (None, None) => {
+                    bail!("a friction net needs its joint: give --joint J (the input '{}' does not name it as qd_J)", inputs[0])
+                }
+            }
+        }
+        _ if joint.is_some() => bail!("--joint is for friction nets; this one is {}", kind.name()),
+        NetKind::Gravity if inputs.len() != targets.len() => {
+            bail!("a gravity net has one torque target per angle input, not {} inputs and {} targets", inputs.len(), targets.len())
+        }
+        _ => Ok((kind, None)),
     }
 }
 

@@ -82,7 +82,18 @@ fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) 
         test_mse: None,
         counts: [0, 0, 0],
     };
-    WeightsFile::new(&net, sig(names.0, "rad", n_in), sig(names.1, "N.m", n_out), TrainSettings::default(), report)
+    let input_unit = if names.0 == "qd" { "rad/s" } else { "rad" };
+    WeightsFile::new(&net, sig(names.0, input_unit, n_in), sig(names.1, "N.m", n_out), TrainSettings::default(), report)
+}
+
+/// The friction net of `joint`: the fixed weights, shifted by a binary fraction per joint (the
+/// compensator refuses one net given for two joints), named and marked for that joint.
+fn fixed_friction(joint: usize) -> neurarm_physics::nn::WeightsFile {
+    let mut file = fixed_weights(1, 3, 1, ("qd", "tau_friction")).friction_of_joint(joint);
+    file.b2[0] += 0.125 * joint as f64;
+    file.inputs[0].name = format!("qd_{joint}");
+    file.outputs[0].name = format!("tau_friction_{joint}");
+    file
 }
 
 #[test]
@@ -92,10 +103,10 @@ fn nn_compensator_model_description_has_not_drifted() {
     let mut friction = Vec::new();
     for j in 1..=4 {
         let name = format!("friction_{j}.json");
-        std::fs::write(dir.path().join(&name), fixed_weights(1, 3, 1, ("qd", "tau")).to_json()).unwrap();
+        std::fs::write(dir.path().join(&name), fixed_friction(j).to_json()).unwrap();
         friction.push(name);
     }
-    std::fs::write(dir.path().join("gravity.json"), fixed_weights(4, 5, 4, ("q", "tau")).to_json()).unwrap();
+    std::fs::write(dir.path().join("gravity.json"), fixed_weights(4, 5, 4, ("q", "tau_gravity")).gravity().to_json()).unwrap();
     let spec = FmuSpec {
         identifier: "NnCompensator".into(),
         model: ModelSpec::NnCompensator(NnCompensatorSpec {
@@ -123,12 +134,13 @@ fn nn_compensator_checks_the_encodings_of_its_nets() {
     let dir = tempfile::tempdir().unwrap();
     let build = |friction: &neurarm_physics::nn::WeightsFile, gravity: &neurarm_physics::nn::WeightsFile| {
         std::fs::write(dir.path().join("friction_1.json"), friction.to_json()).unwrap();
+        std::fs::write(dir.path().join("friction_2.json"), fixed_friction(2).to_json()).unwrap();
         std::fs::write(dir.path().join("gravity.json"), gravity.to_json()).unwrap();
         let spec = FmuSpec {
             identifier: "NnCompensator".into(),
             model: ModelSpec::NnCompensator(NnCompensatorSpec {
                 joints: 2,
-                friction: vec!["friction_1.json".into(), "friction_1.json".into()],
+                friction: vec!["friction_1.json".into(), "friction_2.json".into()],
                 gravity: Some("gravity.json".into()),
                 enable_friction: true,
                 enable_gravity: true,
@@ -136,7 +148,7 @@ fn nn_compensator_checks_the_encodings_of_its_nets() {
         };
         spec.build_from(Some(dir.path())).map(|_| ()).map_err(|e| e.to_string())
     };
-    let friction = fixed_weights(1, 3, 1, ("qd", "tau"));
+    let friction = fixed_friction(1);
     let periodic_gravity = fixed_weights(4, 5, 2, ("q", "tau"));
     let periodic_gravity = neurarm_physics::nn::WeightsFile {
         inputs: periodic_gravity.inputs[..2].to_vec(),
@@ -151,4 +163,9 @@ fn nn_compensator_checks_the_encodings_of_its_nets() {
     let raw_shaped = fixed_weights(2, 5, 2, ("q", "tau")).with_encoding(InputEncoding::LinkAngles);
     let e = build(&friction, &raw_shaped).unwrap_err();
     assert!(e.contains("iw row 0 has 2 values, expected 4"), "{e}");
+    // The resources are checked as `export compensator` checks its files, named by file.
+    let e = build(&fixed_friction(2), &periodic_gravity).unwrap_err();
+    assert!(e.contains("friction_1.json is the friction net of joint 2"), "{e}");
+    let e = build(&friction, &fixed_friction(1)).unwrap_err();
+    assert!(e.contains("gravity.json is the friction net of joint 1, given as the gravity net"), "{e}");
 }

@@ -368,7 +368,8 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
         vec![Signal { name: format!("tau_friction_{name}"), unit: "N.m".into() }],
         settings,
         trained.report,
-    ))
+    )
+    .friction_of_joint(joint + 1))
 }
 
 /// RMS over a 1 mrad/s grid spanning the pairs of net(q̇) − the pairs' piecewise-linear

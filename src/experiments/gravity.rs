@@ -13,7 +13,7 @@ use super::{joint_loop, master, parallel, GravityDesign, Settings, IDENTIFICATIO
 use crate::identify::{gravity_pair, GravityCorrection, GravityOptions, PassFault, PassWindow};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{gravity_torques, inverse_dynamics_rnea_into, ArmData, ArmParams};
-use neurarm_physics::nn::{train, InputEncoding, Signal, TrainSettings, WeightsFile};
+use neurarm_physics::nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 
 /// One averaged measurement: the mean of the up and down passes' angles [rad] and torques [N·m].
 pub type GravityPair = (Vec<f64>, Vec<f64>);
@@ -340,7 +340,7 @@ pub fn train_gravity_net(
     pairs: &[GravityPair],
     encoding: InputEncoding,
     settings: &Settings,
-    on_epoch: &mut dyn FnMut(usize),
+    on_epoch: &mut dyn FnMut(&EpochInfo<'_>),
 ) -> Result<WeightsFile, String> {
     let n = pairs[0].0.len();
     let x = encoding.encode_all(&DMatrix::from_fn(n, pairs.len(), |r, c| pairs[c].0[r]));
@@ -353,10 +353,11 @@ pub fn train_gravity_net(
         seed: settings.seed + 1,
         ..TrainSettings::default()
     };
-    let trained = train(&x, &t, &train_settings, &mut |e| on_epoch(e.epoch)).map_err(|e| format!("gravity net: {e}"))?;
+    let trained = train(&x, &t, &train_settings, on_epoch).map_err(|e| format!("gravity net: {e}"))?;
     let signals = |prefix: &str, unit: &str| (0..n).map(|i| Signal { name: format!("{prefix}_{}", i + 1), unit: unit.into() }).collect();
     Ok(WeightsFile::new(&trained.net, signals("q", "rad"), signals("tau_gravity", "N.m"), train_settings, trained.report)
-        .with_encoding(encoding))
+        .with_encoding(encoding)
+        .gravity())
 }
 
 /// A gravity net's error over random poses of one region, per joint.

@@ -59,7 +59,8 @@ pub struct GravityStudy {
     pub train_s: f64,
 }
 
-/// Measures the study on the simulated arm: every kⁿ grid from 3 points per joint up to
+/// Measures the study on the simulated arm: every kⁿ grid from 3 points per joint (or more, to
+/// reach the trainer's fewest samples) up to
 /// `largest` poses, each swept on its own, and the sampled designs of `SAMPLED_SIZES` up to
 /// `largest` (and `largest` itself) as the first N poses drawn of one sweep of `largest`
 /// sampled poses; on each, one net per encoding (the run's hidden size and epochs), tested on
@@ -75,7 +76,12 @@ pub fn gravity_study(
     let n = model.dof();
     let started = Instant::now();
     let mut designs: Vec<(GravityDesign, Vec<super::GravityPair>)> = Vec::new();
+    // The smallest grid from 3 points per joint that the trainer's split can take.
+    let fewest = neurarm_physics::nn::lm::minimum_samples(neurarm_physics::nn::TrainSettings::default().split);
     let mut k: usize = 3;
+    while k.saturating_pow(n as u32) < fewest {
+        k += 1;
+    }
     while k.saturating_pow(n as u32) <= largest {
         let design = GravityDesign::Grid { per_joint: k };
         let (poses, _) = design_poses(design, n, 0);
@@ -93,6 +99,8 @@ pub fn gravity_study(
         let pairs = (0..sweep.pairs.len()).filter(|&k| drawn_before(k)).map(|k| sweep.pairs[k].clone()).collect();
         designs.push((GravityDesign::Sampled { poses: size }, pairs));
     }
+    // A design whose passes gave too few pairs to train on is left out.
+    designs.retain(|(_, pairs)| pairs.len() >= fewest);
     let measure_s = started.elapsed().as_secs_f64();
     let started = Instant::now();
     let encodings = [InputEncoding::LinkAngles, InputEncoding::JointAngles, InputEncoding::Raw];

@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use fmi2_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
-use neurarm_physics::nn::{EncodedNet, InputEncoding, WeightsFile};
+use neurarm_physics::nn::{EncodedNet, InputEncoding, NetKind, Signal, WeightsFile};
 use serde::{Deserialize, Serialize};
 
 use crate::ports::{CompensatorPorts, Parts};
@@ -44,6 +44,9 @@ impl ModelKind for NnCompensatorSpec {
         };
         let friction = self.friction.iter().map(|f| load(f)).collect::<Result<Vec<_>, _>>()?;
         let gravity = self.gravity.as_deref().map(&mut load).transpose()?;
+        // Named by their resource files, so a refusal says which file is wrong.
+        let named: Vec<(&str, &WeightsFile)> = self.friction.iter().map(String::as_str).zip(&friction).collect();
+        check_compensator_nets(&named, self.gravity.as_deref().zip(gravity.as_ref())).map_err(BuildError::Spec)?;
         let enable = (self.enable_friction, self.enable_gravity);
         Ok(Box::new(NnCompensatorModel::new(identifier, self.joints, &friction, gravity.as_ref(), enable, crc.finalize())?))
     }
@@ -54,6 +57,88 @@ impl ModelKind for NnCompensatorSpec {
 
     fn equations_html(&self) -> &'static str {
         EQUATIONS_HTML
+    }
+}
+
+/// Checks that the nets fit together as a compensator and returns its joint count: each
+/// friction net in its place (the file's recorded kind and joint, or for a net of unspecified
+/// kind an input named `qd_J`, must say joint i for the i-th net), no net given twice, a gravity
+/// net that is one, recorded units that are the compensator's (rad, rad/s, N·m; an empty unit
+/// is not checked), and as many friction nets as the gravity net has angles. Each net comes
+/// with the name messages use for it (its file).
+pub fn check_compensator_nets(friction: &[(&str, &WeightsFile)], gravity: Option<(&str, &WeightsFile)>) -> Result<usize, String> {
+    for (place, (name, file)) in friction.iter().enumerate() {
+        let joint = place + 1;
+        file.network().map_err(|e| format!("{name}: {e}"))?;
+        if let Some((other, _)) = friction[..place].iter().find(|(_, f)| same_weights(f, file)) {
+            return Err(format!("{name} and {other} hold the same net: give each joint its own friction net"));
+        }
+        let claimed = match file.kind {
+            NetKind::Friction => file.joint,
+            NetKind::Gravity => return Err(format!("{name} is a gravity net, given as the friction net of joint {joint}")),
+            NetKind::Unspecified => file.inputs.first().and_then(|s| s.name.strip_prefix("qd_")).and_then(|j| j.parse().ok()),
+        };
+        if let Some(claimed) = claimed.filter(|&c| c != joint) {
+            let order = friction.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ");
+            return Err(format!(
+                "{name} is the friction net of joint {claimed} (by its {}), given as net {joint} of {}: give them in joint order (given: {order})",
+                if file.kind == NetKind::Friction { "recorded joint" } else { "input's name" },
+                friction.len()
+            ));
+        }
+        check_units(name, "input", &file.inputs, "rad/s")?;
+        check_units(name, "output", &file.outputs, "N.m")?;
+    }
+    let joints = match gravity {
+        Some((name, file)) => {
+            file.network().map_err(|e| format!("{name}: {e}"))?;
+            if file.kind == NetKind::Friction {
+                return Err(format!("{name} is the {}, given as the gravity net", file.describe()));
+            }
+            if let Some((other, _)) = friction.iter().find(|(_, f)| same_weights(f, file)) {
+                return Err(format!("{name} and {other} hold the same net"));
+            }
+            check_units(name, "input", &file.inputs, "rad")?;
+            check_units(name, "output", &file.outputs, "N.m")?;
+            let n = file.inputs.len();
+            if file.outputs.len() != n {
+                return Err(format!(
+                    "{name}: a gravity net has one torque output per angle input, not {n} inputs and {} outputs",
+                    file.outputs.len()
+                ));
+            }
+            if !friction.is_empty() && friction.len() != n {
+                return Err(format!(
+                    "{} friction nets but the gravity net {name} is for {n} joints: give one friction net per joint",
+                    friction.len()
+                ));
+            }
+            n
+        }
+        None => friction.len(),
+    };
+    if joints == 0 {
+        return Err("give friction nets, a gravity net, or both".into());
+    }
+    Ok(joints)
+}
+
+/// Whether two files hold the same weights (whatever their names say).
+fn same_weights(a: &WeightsFile, b: &WeightsFile) -> bool {
+    a.iw == b.iw
+        && a.b1 == b.b1
+        && a.lw == b.lw
+        && a.b2 == b.b2
+        && a.input_scaling == b.input_scaling
+        && a.output_scaling == b.output_scaling
+}
+
+/// Refuses a recorded unit other than `expected` (N·m also as `N·m` or `Nm`).
+fn check_units(name: &str, what: &str, signals: &[Signal], expected: &str) -> Result<(), String> {
+    let same = |unit: &str| unit == expected || (expected == "N.m" && matches!(unit, "N·m" | "Nm" | "N m"));
+    match signals.iter().find(|s| !s.unit.is_empty() && !same(&s.unit)) {
+        Some(s) => Err(format!("{name}: {what} '{}' is in {}, the compensator works in {expected}", s.name, s.unit)),
+        None => Ok(()),
     }
 }
 
@@ -97,11 +182,11 @@ impl NnCompensatorModel {
         if joints == 0 {
             return Err(BuildError::Spec("the compensator needs at least one joint".into()));
         }
-        if friction.is_empty() && gravity.is_none() {
-            return Err(BuildError::Spec("give friction nets, a gravity net, or both".into()));
-        }
-        if !friction.is_empty() && friction.len() != joints {
-            return Err(BuildError::Spec(format!("{} friction nets for {joints} joints: give one per joint", friction.len())));
+        let names: Vec<String> = (1..=friction.len()).map(|i| format!("friction net {i}")).collect();
+        let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(friction).collect();
+        let found = check_compensator_nets(&named, gravity.map(|g| ("the gravity net", g))).map_err(BuildError::Spec)?;
+        if found != joints {
+            return Err(BuildError::Spec(format!("the nets are for {found} joints, the compensator for {joints}")));
         }
         let friction: Vec<EncodedNet> = friction
             .iter()

@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use fmi2_export::{DefaultExperiment, DescriptionError, Model, ModelDescription, ModelError, RealVar, TableBuilder, Variable};
 use serde::{Deserialize, Serialize};
 
-pub use compensator::NnCompensatorSpec;
+pub use compensator::{check_compensator_nets, NnCompensatorSpec};
 pub use ideal::IdealCompensatorSpec;
 pub use joint::JointControllerSpec;
 pub use planar_arm::PlanarArmSpec;

@@ -79,7 +79,16 @@ fn step_allocations(model: Box<dyn Model>) -> usize {
 #[test]
 fn every_models_step_allocates_nothing() {
     let dir = tempfile::tempdir().unwrap();
-    for (name, file) in [("friction.json", net_file(1, 5, 1)), ("gravity.json", net_file(4, 6, 4))] {
+    // One net per joint (the compensator refuses the same net twice), each a little different.
+    let mut files: Vec<(String, WeightsFile)> = (1..=4)
+        .map(|j| {
+            let mut net = net_file(1, 5, 1);
+            net.b2[0] += 0.1 * j as f64;
+            (format!("friction_{j}.json"), net)
+        })
+        .collect();
+    files.push(("gravity.json".into(), net_file(4, 6, 4)));
+    for (name, file) in &files {
         std::fs::write(dir.path().join(name), file.to_json()).unwrap();
     }
     let mut config = ArmConfig::default();
@@ -91,7 +100,7 @@ fn every_models_step_allocates_nothing() {
         ModelSpec::PlanarArm(PlanarArmSpec { config, q0: vec![0.3, -0.5, 0.7, -0.2], qd0: vec![0.0; 4] }),
         ModelSpec::NnCompensator(NnCompensatorSpec {
             joints: 4,
-            friction: vec!["friction.json".into(); 4],
+            friction: (1..=4).map(|j| format!("friction_{j}.json")).collect(),
             gravity: Some("gravity.json".into()),
             enable_friction: true,
             enable_gravity: true,

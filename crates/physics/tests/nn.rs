@@ -227,7 +227,7 @@ fn malformed_weights_files_get_clear_messages() {
         let e = WeightsFile::from_json(&v.to_string(), "net.json").unwrap_err().to_string();
         assert!(e.starts_with("net.json: ") && e.contains(expected), "expected {expected:?} in {e:?}");
     };
-    fails(&|v| v["version"] = 3.into(), "version 3 is not supported");
+    fails(&|v| v["version"] = 4.into(), "version 4 is not supported");
     fails(&|v| v["version"] = 0.into(), "version 0 is not supported");
     fails(&|v| v["format"] = "something".into(), "format is 'something'");
     fails(&|v| v["b2"] = serde_json::json!([0.1, 0.2]), "b2 has 2 values, expected 1");
@@ -241,6 +241,101 @@ fn malformed_weights_files_get_clear_messages() {
         "missing field `lw`",
     );
     fails(&|v| v["extra"] = 1.into(), "unknown field `extra`");
+    // Kinds: a friction net names its joint and has one input and one output.
+    fails(&|v| v["kind"] = "friction".into(), "must name its joint");
+    fails(
+        &|v| {
+            v["kind"] = "friction".into();
+            v["joint"] = 0.into();
+        },
+        "numbered from 1",
+    );
+    fails(&|v| v["joint"] = 2.into(), "only a friction net names a joint");
+    fails(&|v| v["kind"] = "inertia".into(), "unknown variant `inertia`");
+    fails(
+        &|v| {
+            v["version"] = 2.into();
+            v["kind"] = "gravity".into();
+        },
+        "a version 2 file records no kind",
+    );
     let e = WeightsFile::from_json("{\"format\": \"neurarm-weights\", \"version\": 1, \"b1\": [NaN]}", "nan.json").unwrap_err().to_string();
     assert!(e.starts_with("nan.json: "), "{e}");
+}
+
+#[test]
+fn weights_files_of_version_2_are_read_with_an_unspecified_kind() {
+    let mut v: serde_json::Value = serde_json::from_str(&weights_file().friction_of_joint(1).to_json()).unwrap();
+    assert_eq!(v["kind"], "friction");
+    assert_eq!(v["joint"], 1);
+    v["version"] = 2.into();
+    let object = v.as_object_mut().unwrap();
+    object.remove("kind");
+    object.remove("joint");
+    let old = WeightsFile::from_json(&v.to_string(), "old.json").unwrap();
+    assert_eq!((old.kind, old.joint), (NetKind::Unspecified, None));
+    let back = WeightsFile::from_json(&weights_file().friction_of_joint(3).to_json(), "new.json").unwrap();
+    assert_eq!((back.kind, back.joint, back.describe().as_str()), (NetKind::Friction, Some(3), "friction net of joint 3"));
+}
+
+#[test]
+fn training_refuses_settings_and_data_that_cannot_make_a_useful_net() {
+    use neurarm_physics::nn::lm::{check_settings, minimum_samples, weight_count, workspace_bytes, TrainError};
+    let ok = TrainSettings::default();
+    assert_eq!(minimum_samples(ok.split), 17);
+    assert!(check_settings(&ok, 1, 1, 17).is_ok());
+    // Each part's size as the split makes it, from the same rounding.
+    for q in [16, 13, 3] {
+        let e = check_settings(&ok, 1, 1, q).unwrap_err();
+        assert!(matches!(e, TrainError::Data(_)) && e.to_string().contains("at least 17 samples"), "{q}: {e}");
+        let counts = split(q, ok.split, 1).map(|p| p.len());
+        assert!(counts[0] < 10 || counts[1] < 3 || counts[2] < 3, "{q}: {counts:?} was refused but meets the minimum");
+    }
+    assert_eq!(minimum_samples([1.0, 0.0, 0.0]), 10);
+    assert_eq!(minimum_samples([0.8, 0.2, 0.0]), 13);
+    let with = |edit: &dyn Fn(&mut TrainSettings)| {
+        let mut s = ok.clone();
+        edit(&mut s);
+        check_settings(&s, 2, 2, 100).unwrap_err().to_string()
+    };
+    assert!(with(&|s| s.epochs = 0).contains("epochs must be >= 1"));
+    assert!(with(&|s| s.max_fail = 0).contains("max_fail must be >= 1"));
+    assert!(with(&|s| s.hidden = 1001).contains("hidden must be 1 to 1000"));
+    assert!(with(&|s| s.hidden = usize::MAX).contains("hidden must be 1 to 1000"));
+    assert!(with(&|s| s.split = [0.5, 0.5, 0.5]).contains("sum to 1"));
+    assert!(with(&|s| s.split = [0.7, f64::NAN, 0.3]).contains("sum to 1"));
+    assert!(with(&|s| s.split = [1.1, -0.1, 0.0]).contains("must be >= 0"));
+    // Sizes: counted, not overflowed; a large net or a huge data set is refused before allocation.
+    assert_eq!(weight_count(2, 10, 3), Some(10 * 3 + 3 * 11));
+    assert_eq!(weight_count(usize::MAX, 2, 1), None);
+    assert!(workspace_bytes(4, 1000, 4, usize::MAX).is_none());
+    let mut big = ok.clone();
+    big.hidden = 1000;
+    assert!(check_settings(&big, 4, 4, 100).unwrap_err().to_string().contains("more than 5000 weights"));
+    big.hidden = 300;
+    let e = check_settings(&big, 4, 4, 10_000_000).unwrap_err().to_string();
+    assert!(e.contains("of memory") && e.contains("limit is 8 GiB"), "{e}");
+
+    // A constant input row carries nothing; training says which.
+    let x = DMatrix::from_fn(2, 30, |r, c| if r == 1 { 0.5 } else { c as f64 });
+    let t = DMatrix::from_fn(1, 30, |_, c| (c as f64).sin());
+    let e = train(&x, &t, &ok, &mut |_| {}).unwrap_err().to_string();
+    assert!(e.contains("input 2 is constant"), "{e}");
+}
+
+#[test]
+fn a_recorded_time_series_is_told_from_identified_pairs() {
+    use neurarm_physics::nn::lm::time_series_warning;
+    // 1 kHz samples of a settling velocity.
+    let series = DMatrix::from_fn(1, 3000, |_, k| 2.0 * (1.0 - (-(k as f64) * 1e-3 / 0.3).exp()));
+    assert!(time_series_warning(&series).is_some());
+    // Pairs on a 0.05 rad/s grid over ±5 rad/s (201 pairs), and the same shuffled.
+    let grid = DMatrix::from_fn(1, 201, |_, k| -5.0 + 0.05 * k as f64);
+    assert!(time_series_warning(&grid).is_none());
+    let shuffled = DMatrix::from_fn(1, 3000, |_, k| ((k * 7919) % 3000) as f64);
+    assert!(time_series_warning(&shuffled).is_none());
+    // Random poses of three joints.
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let poses = DMatrix::from_fn(3, 2000, |_, _| rng.gen_range(-3.1..3.1));
+    assert!(time_series_warning(&poses).is_none());
 }

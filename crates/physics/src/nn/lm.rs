@@ -182,6 +182,141 @@ pub enum TrainError {
     Settings(String),
 }
 
+/// Largest number of hidden neurons [`train`] accepts.
+pub const MAX_HIDDEN: usize = 1000;
+/// Largest number of weights and biases [`train`] accepts: Levenberg–Marquardt factors a
+/// square matrix of this order every step (5000: three 200 MB matrices, seconds per step).
+pub const MAX_WEIGHTS: usize = 5000;
+/// Largest working memory [`train`] allocates [bytes] (8 GiB).
+pub const MAX_WORKSPACE_BYTES: usize = 8 << 30;
+/// Fewest samples of the training part.
+pub const MIN_TRAINING_SAMPLES: usize = 10;
+/// Fewest samples of the validation and of the test part, when its fraction is not 0: fewer
+/// make early stopping and the test error a matter of luck.
+pub const MIN_CHECK_SAMPLES: usize = 3;
+
+/// Weights and biases of a two-layer net with `n` inputs, `h` hidden neurons and `k`
+/// outputs; none if the count overflows.
+pub fn weight_count(n: usize, h: usize, k: usize) -> Option<usize> {
+    h.checked_mul(n.checked_add(1)?)?.checked_add(k.checked_mul(h.checked_add(1)?)?)
+}
+
+/// The working memory of training such a net on `q` samples [bytes]; none if it overflows.
+pub fn workspace_bytes(n: usize, h: usize, k: usize, q: usize) -> Option<usize> {
+    let p = weight_count(n, h, k)?;
+    let pw = h.checked_mul(n + 1)?.checked_add(h + 1)?;
+    // Three P×P matrices (JᵀJ, two factors), the Gram matrix, per-sample rows, activations
+    // (four copies), errors, and the chunked sums.
+    let square = p.checked_mul(p)?.checked_mul(3)?.checked_add(pw.checked_mul(pw)?)?;
+    let per_sample = pw.checked_add(h.checked_add(1)?.checked_mul(4)?)?.checked_add(k)?.checked_mul(q)?;
+    let chunks = q.div_ceil(SAMPLE_CHUNK).checked_mul(p.checked_add(3 * k)?)?;
+    square.checked_add(per_sample)?.checked_add(chunks)?.checked_mul(8)
+}
+
+/// Checks `s` for a net with `n` inputs and `k` outputs trained on `q` samples: positive
+/// hidden size, epochs, validation failures and restarts; damping factors in range; split
+/// fractions finite, ≥ 0 and summing to 1; the net within [`MAX_HIDDEN`], [`MAX_WEIGHTS`]
+/// and [`MAX_WORKSPACE_BYTES`]; the split's parts no smaller than [`MIN_TRAINING_SAMPLES`]
+/// and [`MIN_CHECK_SAMPLES`] (as [`split`] makes them).
+pub fn check_settings(s: &TrainSettings, n: usize, k: usize, q: usize) -> Result<(), TrainError> {
+    let bad = |what: String| Err(TrainError::Settings(what));
+    if s.hidden == 0 || s.hidden > MAX_HIDDEN {
+        return bad(format!("hidden must be 1 to {MAX_HIDDEN} neurons, not {}", s.hidden));
+    }
+    for (name, value) in [("epochs", s.epochs), ("max_fail", s.max_fail), ("restarts", s.restarts)] {
+        if value == 0 {
+            return bad(format!("{name} must be >= 1 (0 would keep the untrained initial weights)"));
+        }
+    }
+    if !(s.mu > 0.0 && s.mu_dec > 0.0 && s.mu_dec < 1.0 && s.mu_inc > 1.0 && s.mu_max >= s.mu) {
+        return bad("need mu > 0, 0 < mu_dec < 1 < mu_inc, mu_max >= mu".into());
+    }
+    if !(s.goal >= 0.0 && s.min_grad >= 0.0) {
+        return bad(format!("goal and min_grad must be >= 0 (got {}, {})", s.goal, s.min_grad));
+    }
+    let sum: f64 = s.split.iter().sum();
+    if s.split.iter().any(|f| !(f.is_finite() && *f >= 0.0)) || (sum - 1.0).abs() > 1e-9 {
+        let [a, b, c] = s.split;
+        return bad(format!("the split fractions (train, validation, test) must be >= 0 and sum to 1, not {a}, {b}, {c} (sum {sum})"));
+    }
+    let weights = weight_count(n, s.hidden, k).filter(|&w| w <= MAX_WEIGHTS);
+    let Some(weights) = weights else {
+        return bad(format!(
+            "a net of {n} inputs, {} hidden neurons and {k} outputs has more than {MAX_WEIGHTS} weights, the most this trainer factors",
+            s.hidden
+        ));
+    };
+    match workspace_bytes(n, s.hidden, k, q) {
+        Some(bytes) if bytes <= MAX_WORKSPACE_BYTES => {}
+        bytes => {
+            let shown = bytes.map_or("more than the address space".to_owned(), |b| format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64));
+            return bad(format!(
+                "training {weights} weights on {q} samples needs {shown} of memory; the limit is {} GiB: use fewer hidden neurons or samples",
+                MAX_WORKSPACE_BYTES >> 30
+            ));
+        }
+    }
+    let counts = split(q, s.split, s.seed).map(|p| p.len());
+    let short = [
+        ("training", counts[0], MIN_TRAINING_SAMPLES, true),
+        ("validation", counts[1], MIN_CHECK_SAMPLES, s.split[1] > 0.0),
+        ("test", counts[2], MIN_CHECK_SAMPLES, s.split[2] > 0.0),
+    ]
+    .into_iter()
+    .find(|&(_, count, min, used)| used && count < min);
+    if let Some((part, count, min, _)) = short {
+        let need = minimum_samples(s.split);
+        let [a, b, c] = s.split;
+        return Err(TrainError::Data(format!(
+            "{q} samples give the {part} part {count} at the split {a}/{b}/{c}; it needs at least {min}: give at least {need} samples{}",
+            if part == "training" { "" } else { " (or a split without that part)" }
+        )));
+    }
+    Ok(())
+}
+
+/// The fewest samples whose split into `fractions` meets [`MIN_TRAINING_SAMPLES`] and
+/// [`MIN_CHECK_SAMPLES`] (17 at the default 70/15/15).
+pub fn minimum_samples(fractions: [f64; 3]) -> usize {
+    (1..1_000_000)
+        .find(|&q| {
+            let c = split(q, fractions, 0).map(|p| p.len());
+            c[0] >= MIN_TRAINING_SAMPLES
+                && (fractions[1] == 0.0 || c[1] >= MIN_CHECK_SAMPLES)
+                && (fractions[2] == 0.0 || c[2] >= MIN_CHECK_SAMPLES)
+        })
+        .unwrap_or(usize::MAX)
+}
+
+/// A warning when `inputs` (one column per sample) look like a recorded time series rather
+/// than identified pairs: more than 200 samples of which, in file order, the typical step
+/// from one sample to the next is below 0.1 % of every input's range. A net trained on such
+/// data learns the transients and the sampling, not the steady relation; identify pairs
+/// first (`neurarm identify`).
+pub fn time_series_warning(inputs: &DMatrix<f64>) -> Option<String> {
+    let q = inputs.ncols();
+    if q <= 200 {
+        return None;
+    }
+    let ranges: Vec<f64> = inputs.row_iter().map(|r| r.max() - r.min()).collect();
+    let mut steps: Vec<f64> = (1..q)
+        .map(|c| {
+            (0..inputs.nrows())
+                .filter(|&r| ranges[r] > 0.0)
+                .map(|r| (inputs[(r, c)] - inputs[(r, c - 1)]).abs() / ranges[r])
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    let median = steps[steps.len() / 2];
+    (median < 1e-3).then(|| {
+        format!(
+            "the {q} samples look like a recorded time series, not identified pairs: from one sample to the next the inputs typically move {:.2e} of their range; a net trained on them learns transients; make pairs with `neurarm identify` first",
+            median
+        )
+    })
+}
+
 /// tanh through one `exp` (libm's tanh goes through the slower `expm1`): a few ulp from
 /// libm for |x| ≳ 0.01, relative error below 1e-13 down to |x| = 1e-3 and ~1e-16/|x|
 /// beneath, where it only perturbs training, never the evaluation of a trained net.
@@ -854,26 +989,21 @@ pub fn train_with_threads(
         return Err(TrainError::Data("the data holds NaN or infinite values".into()));
     }
     let s = settings;
-    let bad = |what: &str| Err(TrainError::Settings(what.to_owned()));
-    if s.hidden == 0 {
-        return bad("hidden must be >= 1");
-    }
-    if !(s.mu > 0.0 && s.mu_dec > 0.0 && s.mu_dec < 1.0 && s.mu_inc > 1.0 && s.mu_max >= s.mu) {
-        return bad("need mu > 0, 0 < mu_dec < 1 < mu_inc, mu_max >= mu");
-    }
-    if s.split.iter().any(|f| !(*f >= 0.0)) || !(s.split[0] > 0.0) {
-        return bad("split fractions must be >= 0 with a positive training fraction");
-    }
-    if s.restarts == 0 {
-        return bad("restarts must be >= 1");
+    check_settings(s, inputs.nrows(), targets.nrows(), q)?;
+    if let Some(row) = (0..inputs.nrows()).find(|&r| {
+        let row = inputs.row(r);
+        row.iter().all(|&v| v == row[0])
+    }) {
+        return Err(TrainError::Data(format!(
+            "input {} is constant ({} in every sample): it carries nothing to learn from",
+            row + 1,
+            inputs[(row, 0)]
+        )));
     }
     let input_scaling = MinMaxScaling::fit(inputs);
     let output_scaling = MinMaxScaling::fit(targets);
     let (xs, ts) = (input_scaling.apply_all(inputs), output_scaling.apply_all(targets));
     let parts = split(q, s.split, s.seed);
-    if parts[0].is_empty() {
-        return Err(TrainError::Data(format!("{q} samples leave none for training")));
-    }
     let [train_part, val_part, test_part] = [0, 1, 2].map(|i| Part::new(&xs, &ts, &parts[i]));
     let (n, k) = (inputs.nrows(), targets.nrows());
     let mut ws = Workspace::new(n, s.hidden, k, train_part.count, val_part.count.max(test_part.count));

@@ -11,9 +11,44 @@ use super::mlp::{MinMaxScaling, Mlp};
 
 /// Value of `format` in every weights file.
 pub const FORMAT: &str = "neurarm-weights";
-/// The version this build writes. Version 2 added `encoding`; version 1 files (raw inputs
-/// only) are still read.
-pub const VERSION: u32 = 2;
+/// The version this build writes. Version 3 added `kind` and `joint`, version 2 `encoding`;
+/// files of versions 1 and 2 are still read (their kind is [`NetKind::Unspecified`]).
+pub const VERSION: u32 = 3;
+
+/// What a net computes, so that a compensator can check it is given the right nets in the
+/// right places.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NetKind {
+    /// Not recorded (files before version 3, or trained on other data).
+    #[default]
+    Unspecified,
+    /// One joint's friction torque [N·m] from that joint's velocity [rad/s].
+    Friction,
+    /// The gravity torques of all joints [N·m] from all joint angles [rad].
+    Gravity,
+}
+
+impl NetKind {
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            NetKind::Unspecified => "unspecified",
+            NetKind::Friction => "friction",
+            NetKind::Gravity => "gravity",
+        }
+    }
+
+    /// Parses [`NetKind::name`].
+    pub fn parse(text: &str) -> Result<Self, String> {
+        match text.trim() {
+            "unspecified" => Ok(NetKind::Unspecified),
+            "friction" => Ok(NetKind::Friction),
+            "gravity" => Ok(NetKind::Gravity),
+            other => Err(format!("unknown net kind '{other}': use friction, gravity or unspecified")),
+        }
+    }
+}
 
 /// A named input or output with its unit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -40,6 +75,12 @@ pub struct WeightsFile {
     pub encoding: InputEncoding,
     /// The outputs, in order.
     pub outputs: Vec<Signal>,
+    /// What the net computes (absent before version 3: unspecified).
+    #[serde(default)]
+    pub kind: NetKind,
+    /// The joint (1-based) of a friction net; none for other kinds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<usize>,
     /// Input weights, one row per hidden neuron and one value per encoded input.
     pub iw: Vec<Vec<f64>>,
     /// Hidden biases.
@@ -90,6 +131,8 @@ impl WeightsFile {
             inputs,
             encoding: InputEncoding::Raw,
             outputs,
+            kind: NetKind::Unspecified,
+            joint: None,
             iw: rows(&net.iw),
             b1: net.b1.iter().copied().collect(),
             lw: rows(&net.lw),
@@ -108,7 +151,31 @@ impl WeightsFile {
         self
     }
 
-    /// Checks sizes, finiteness and version; returns the network behind its encoding.
+    /// The same file marked as the friction net of `joint` (1-based).
+    pub fn friction_of_joint(mut self, joint: usize) -> Self {
+        self.kind = NetKind::Friction;
+        self.joint = Some(joint);
+        self
+    }
+
+    /// The same file marked as a gravity net.
+    pub fn gravity(mut self) -> Self {
+        self.kind = NetKind::Gravity;
+        self.joint = None;
+        self
+    }
+
+    /// What the file says it is, for messages: "friction net of joint 2", "gravity net", "net".
+    pub fn describe(&self) -> String {
+        match (self.kind, self.joint) {
+            (NetKind::Friction, Some(j)) => format!("friction net of joint {j}"),
+            (NetKind::Friction, None) => "friction net".into(),
+            (NetKind::Gravity, _) => "gravity net".into(),
+            (NetKind::Unspecified, _) => format!("net of unspecified kind ({} inputs, {} outputs)", self.inputs.len(), self.outputs.len()),
+        }
+    }
+
+    /// Checks sizes, finiteness, version and kind; returns the network behind its encoding.
     pub fn network(&self) -> Result<EncodedNet, String> {
         if self.format != FORMAT {
             return Err(format!("format is '{}', expected '{FORMAT}'", self.format));
@@ -119,8 +186,36 @@ impl WeightsFile {
         if self.version == 1 && self.encoding != InputEncoding::Raw {
             return Err(format!("a version 1 file has raw inputs only, not the '{}' encoding", self.encoding.name()));
         }
+        if self.version < 3 && (self.kind != NetKind::Unspecified || self.joint.is_some()) {
+            return Err(format!("a version {} file records no kind or joint (they came with version 3)", self.version));
+        }
         if self.inputs.is_empty() {
             return Err("empty network: 0 inputs".into());
+        }
+        match (self.kind, self.joint) {
+            (NetKind::Friction, None) => return Err("a friction net must name its joint (\"joint\": 1, 2, …)".into()),
+            (NetKind::Friction, Some(0)) => return Err("joint 0: joints are numbered from 1".into()),
+            (NetKind::Friction, Some(_)) if self.inputs.len() != 1 || self.outputs.len() != 1 => {
+                return Err(format!(
+                    "a friction net has 1 input (velocity) and 1 output (torque), not {} and {}",
+                    self.inputs.len(),
+                    self.outputs.len()
+                ))
+            }
+            (NetKind::Friction, Some(_)) if self.encoding != InputEncoding::Raw => {
+                return Err(format!("a friction net takes the velocity as it is, not encoded as '{}'", self.encoding.name()))
+            }
+            (NetKind::Gravity, _) if self.inputs.len() != self.outputs.len() => {
+                return Err(format!(
+                    "a gravity net has one output per angle input, not {} inputs and {} outputs",
+                    self.inputs.len(),
+                    self.outputs.len()
+                ))
+            }
+            (NetKind::Gravity | NetKind::Unspecified, Some(j)) => {
+                return Err(format!("only a friction net names a joint; this {} names joint {j}", self.kind.name()))
+            }
+            _ => {}
         }
         let (n, h, k) = (self.encoding.features(self.inputs.len()), self.b1.len(), self.outputs.len());
         if h == 0 || k == 0 {
