@@ -1043,10 +1043,10 @@ fn train_from_csv(
         eprintln!("warning: {}: {warning}", data.display());
     }
     let weights = neurarm_physics::nn::lm::weight_count(encoding.features(inputs.len()), settings.hidden, targets.len()).unwrap_or(0);
-    if weights > table.rows() * 7 / 10 * targets.len() {
+    let training_values = neurarm_physics::nn::lm::split(table.rows(), settings.split, settings.seed)[0].len() * targets.len();
+    if weights > training_values {
         eprintln!(
-            "notice: the net has {weights} weights for about {} training target values: it can fit noise; validation stopping is what holds it",
-            table.rows() * 7 / 10 * targets.len()
+            "notice: the net has {weights} weights for {training_values} training target values: it can fit noise; validation stopping is what holds it"
         );
     }
     let (x, t) = (encoding.encode_all(&raw), matrix(targets));
