@@ -172,6 +172,52 @@ pub enum Kind {
         /// Start value.
         start: Option<String>,
     },
+    /// An enumeration: one of the items of a declared type. Its values are read and set with
+    /// `fmi2GetInteger`/`fmi2SetInteger` and share the Integer value references.
+    Enumeration {
+        /// The declared type, listed in `TypeDefinitions`.
+        declared_type: EnumerationType,
+        /// Start value: one of the items' values.
+        start: Option<i32>,
+    },
+}
+
+/// An enumeration type (`TypeDefinitions/SimpleType/Enumeration`): named items with their
+/// integer values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnumerationType {
+    /// The type's name, which variables give as `declaredType`.
+    pub name: String,
+    /// The items: name, value, description.
+    pub items: Vec<EnumerationItem>,
+}
+
+/// One item of an [`EnumerationType`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnumerationItem {
+    /// Name, unique in the type.
+    pub name: String,
+    /// Value, unique in the type.
+    pub value: i32,
+    /// What it means.
+    pub description: String,
+}
+
+impl EnumerationType {
+    /// A type called `name` whose items are `items` (name, description), valued 1, 2, ….
+    pub fn new(name: impl Into<String>, items: &[(&str, &str)]) -> Self {
+        let items = items
+            .iter()
+            .zip(1..)
+            .map(|(&(n, d), value)| EnumerationItem { name: n.to_owned(), value, description: d.to_owned() })
+            .collect();
+        Self { name: name.into(), items }
+    }
+
+    /// The item of value `value`, if any.
+    pub fn item(&self, value: i32) -> Option<&EnumerationItem> {
+        self.items.iter().find(|i| i.value == value)
+    }
 }
 
 impl Kind {
@@ -182,6 +228,7 @@ impl Kind {
             Kind::Integer { start } => start.map(|s| s.to_string()),
             Kind::Boolean { start } => start.map(|s| s.to_string()),
             Kind::String { start } => start.clone(),
+            Kind::Enumeration { start, .. } => start.map(|s| s.to_string()),
         }
     }
 
@@ -252,6 +299,17 @@ impl Variable {
             Kind::Integer { .. } => BaseType::Integer,
             Kind::Boolean { .. } => BaseType::Boolean,
             Kind::String { .. } => BaseType::String,
+            Kind::Enumeration { .. } => BaseType::Integer,
+        }
+    }
+
+    /// Whether the variable has `initial="exact"`: a parameter, or an output given a start
+    /// value (which the environment may set before initialization).
+    pub fn is_exact(&self) -> bool {
+        match self.causality {
+            Causality::Parameter => true,
+            Causality::Output | Causality::Local => self.kind.start_text().is_some(),
+            _ => false,
         }
     }
 
@@ -259,7 +317,10 @@ impl Variable {
     pub fn settable_in(&self, phase: SetPhase) -> bool {
         use Causality::*;
         match self.causality {
-            Output | Independent | Local => false,
+            // FMI 2.0 (4.2.4): before and in initialization mode, a variable with
+            // initial="exact" may be set; an output or local with a start value is one.
+            Output | Local => self.is_exact() && phase != SetPhase::Running && self.variability != Variability::Constant,
+            Independent => false,
             Input => true,
             Parameter => match phase {
                 SetPhase::Instantiated | SetPhase::Initialization => self.variability != Variability::Constant,
@@ -335,6 +396,13 @@ pub enum DescriptionError {
         /// The 1-based index listed.
         index: usize,
     },
+    /// An enumeration type without items, with repeated names or values, or two types of
+    /// one name with different items.
+    #[error("enumeration type '{0}': {1}")]
+    BadEnumeration(String, &'static str),
+    /// An enumeration start value that is none of its type's items.
+    #[error("'{0}' starts at {1}, which is not an item of its enumeration type")]
+    BadEnumerationStart(String, i32),
     /// Two units of the same name with different definitions.
     #[error("unit '{0}' is declared twice with different definitions")]
     UnitConflict(&'static str),
@@ -358,6 +426,10 @@ pub struct ModelDescription {
     pub default_experiment: Option<DefaultExperiment>,
     /// The variables, in `ModelVariables` order.
     pub variables: Vec<Variable>,
+    /// `canHandleVariableCommunicationStepSize`: true unless the model steps only at one fixed
+    /// communication step ([`ModelDescription::with_fixed_communication_step`]), which the
+    /// layer then enforces.
+    pub can_handle_variable_step: bool,
 }
 
 impl ModelDescription {
@@ -371,6 +443,7 @@ impl ModelDescription {
             generation_tool: concat!("fmi2-export ", env!("CARGO_PKG_VERSION")).to_owned(),
             default_experiment: None,
             variables,
+            can_handle_variable_step: true,
         };
         d.check()?;
         Ok(d)
@@ -386,6 +459,27 @@ impl ModelDescription {
     pub fn with_default_experiment(mut self, experiment: DefaultExperiment) -> Self {
         self.default_experiment = Some(experiment);
         self
+    }
+
+    /// The same description for a model that can only step at one communication step size:
+    /// `canHandleVariableCommunicationStepSize="false"`; the layer refuses a step of another
+    /// size than the first.
+    pub fn with_fixed_communication_step(mut self) -> Self {
+        self.can_handle_variable_step = false;
+        self
+    }
+
+    /// The enumeration types the variables use, each once, in order of first use.
+    pub fn enumeration_types(&self) -> Vec<&EnumerationType> {
+        let mut used: Vec<&EnumerationType> = Vec::new();
+        for v in &self.variables {
+            if let Kind::Enumeration { declared_type, .. } = &v.kind {
+                if !used.iter().any(|t| t.name == declared_type.name) {
+                    used.push(declared_type);
+                }
+            }
+        }
+        used
     }
 
     /// The GUID: a UUID (v5) of the model description with an empty GUID, so any change of
@@ -420,6 +514,7 @@ impl ModelDescription {
         let mut names = std::collections::HashSet::new();
         let mut refs = std::collections::HashSet::new();
         let mut units: Vec<&Unit> = Vec::new();
+        let mut enumerations: Vec<&EnumerationType> = Vec::new();
         for v in &self.variables {
             if !names.insert(v.name.as_str()) {
                 return Err(DescriptionError::RepeatedName(v.name.clone()));
@@ -434,9 +529,23 @@ impl ModelDescription {
                     None => units.push(u),
                 }
             }
+            if let Kind::Enumeration { declared_type: t, start } = &v.kind {
+                check_enumeration(t)?;
+                match enumerations.iter().find(|x| x.name == t.name) {
+                    Some(x) if *x != t => {
+                        return Err(DescriptionError::BadEnumeration(t.name.clone(), "declared twice with different items"))
+                    }
+                    Some(_) => {}
+                    None => enumerations.push(t),
+                }
+                if let Some(value) = start.filter(|&s| t.item(s).is_none()) {
+                    return Err(DescriptionError::BadEnumerationStart(v.name.clone(), value));
+                }
+            }
             let has_start = v.kind.start_text().is_some();
             let needs_start = matches!(v.causality, Causality::Parameter | Causality::Input);
-            let forbids_start = matches!(v.causality, Causality::Output | Causality::Independent);
+            // An output may have a start value: it then has initial="exact".
+            let forbids_start = v.causality == Causality::Independent;
             if needs_start && !has_start {
                 return Err(DescriptionError::MissingStart(v.name.clone()));
             }
@@ -469,7 +578,7 @@ impl ModelDescription {
         w.write_event(Event::Start(root)).expect(ok);
         w.write_event(Event::Empty(BytesStart::new("CoSimulation").with_attributes([
             ("modelIdentifier", self.model_identifier.as_str()),
-            ("canHandleVariableCommunicationStepSize", "true"),
+            ("canHandleVariableCommunicationStepSize", if self.can_handle_variable_step { "true" } else { "false" }),
             ("canGetAndSetFMUstate", "true"),
             ("canSerializeFMUstate", "true"),
             ("canNotUseMemoryManagementFunctions", "true"),
@@ -494,6 +603,27 @@ impl ModelDescription {
                 w.write_event(Event::End(BytesEnd::new("Unit"))).expect(ok);
             }
             w.write_event(Event::End(BytesEnd::new("UnitDefinitions"))).expect(ok);
+        }
+
+        let enumerations = self.enumeration_types();
+        if !enumerations.is_empty() {
+            w.write_event(Event::Start(BytesStart::new("TypeDefinitions"))).expect(ok);
+            for t in enumerations {
+                w.write_event(Event::Start(BytesStart::new("SimpleType").with_attributes([("name", t.name.as_str())]))).expect(ok);
+                w.write_event(Event::Start(BytesStart::new("Enumeration"))).expect(ok);
+                for item in &t.items {
+                    let value = item.value.to_string();
+                    let e = BytesStart::new("Item").with_attributes([
+                        ("name", item.name.as_str()),
+                        ("value", value.as_str()),
+                        ("description", item.description.as_str()),
+                    ]);
+                    w.write_event(Event::Empty(e)).expect(ok);
+                }
+                w.write_event(Event::End(BytesEnd::new("Enumeration"))).expect(ok);
+                w.write_event(Event::End(BytesEnd::new("SimpleType"))).expect(ok);
+            }
+            w.write_event(Event::End(BytesEnd::new("TypeDefinitions"))).expect(ok);
         }
 
         w.write_event(Event::Start(BytesStart::new("LogCategories"))).expect(ok);
@@ -525,11 +655,17 @@ impl ModelDescription {
             ]);
             match v.causality {
                 Causality::Parameter => sv.push_attribute(("initial", "exact")),
+                Causality::Output | Causality::Local if v.is_exact() => sv.push_attribute(("initial", "exact")),
                 Causality::Output => sv.push_attribute(("initial", "calculated")),
                 _ => {}
             }
             w.write_event(Event::Start(sv)).expect(ok);
-            let mut t = BytesStart::new(v.base_type().name());
+            let mut t = match &v.kind {
+                Kind::Enumeration { declared_type, .. } => {
+                    BytesStart::new("Enumeration").with_attributes([("declaredType", declared_type.name.as_str())])
+                }
+                _ => BytesStart::new(v.base_type().name()),
+            };
             if let Some(unit) = v.kind.unit() {
                 t.push_attribute(("unit", unit.name));
             }
@@ -556,10 +692,14 @@ impl ModelDescription {
                 w.write_event(Event::Empty(u)).expect(ok);
             }
             w.write_event(Event::End(BytesEnd::new("Outputs"))).expect(ok);
-            // Every output is calculated during initialization from parameters (and, with
-            // direct feedthrough, inputs); no dependencies attribute means "may depend on all".
+        }
+        // Every output but those with initial="exact" is calculated during initialization
+        // from parameters (and, with direct feedthrough, inputs); no dependencies attribute
+        // means "may depend on all".
+        let calculated: Vec<usize> = outputs.iter().filter(|(_, v)| !v.is_exact()).map(|(i, _)| *i).collect();
+        if !calculated.is_empty() {
             w.write_event(Event::Start(BytesStart::new("InitialUnknowns"))).expect(ok);
-            for (index, _) in &outputs {
+            for index in &calculated {
                 let index = index.to_string();
                 w.write_event(Event::Empty(BytesStart::new("Unknown").with_attributes([("index", index.as_str())]))).expect(ok);
             }
@@ -571,6 +711,28 @@ impl ModelDescription {
         text.push('\n');
         text
     }
+}
+
+fn check_enumeration(t: &EnumerationType) -> Result<(), DescriptionError> {
+    let bad = |why| Err(DescriptionError::BadEnumeration(t.name.clone(), why));
+    if t.name.is_empty() {
+        return bad("the type has no name");
+    }
+    if t.items.is_empty() {
+        return bad("it has no items");
+    }
+    for (k, item) in t.items.iter().enumerate() {
+        if item.name.is_empty() {
+            return bad("an item has no name");
+        }
+        if t.items[..k].iter().any(|x| x.name == item.name) {
+            return bad("two items have the same name");
+        }
+        if t.items[..k].iter().any(|x| x.value == item.value) {
+            return bad("two items have the same value");
+        }
+    }
+    Ok(())
 }
 
 /// A model identifier must be usable as a C identifier and a file name.

@@ -12,8 +12,8 @@
 //!   allows only getting values, restoring an FMU state, `fmi2Reset` and `fmi2FreeInstance`.
 
 use crate::codec::{Put, Reader, StateError};
-use crate::description::{BaseType, ModelDescription, SetPhase, LOG_CATEGORIES};
-use crate::model::{Model, Values};
+use crate::description::{BaseType, Kind, ModelDescription, SetPhase, LOG_CATEGORIES};
+use crate::model::{Discard, Model, Values};
 
 /// `fmi2Status`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -147,6 +147,10 @@ pub struct Instance {
     start_time: f64,
     time: f64,
     dirty: bool,
+    /// The last step was discarded because the model asks to end the simulation.
+    terminated: bool,
+    /// For a model that cannot handle variable steps: the size of the first step [s].
+    fixed_step: Option<f64>,
     log: LogSink,
     debug_logging: bool,
     categories: Vec<bool>,
@@ -199,6 +203,8 @@ impl Instance {
             start_time: 0.0,
             time: 0.0,
             dirty: true,
+            terminated: false,
+            fixed_step: None,
             log,
             debug_logging,
             categories: LOG_CATEGORIES.iter().map(|_| debug_logging).collect(),
@@ -341,6 +347,8 @@ impl Instance {
         self.start_time = 0.0;
         self.time = 0.0;
         self.dirty = true;
+        self.terminated = false;
+        self.fixed_step = None;
         Status::Ok
     }
 
@@ -469,8 +477,23 @@ impl Instance {
         Status::Ok
     }
 
-    /// `fmi2SetInteger`.
+    /// `fmi2SetInteger`: an enumeration variable takes only its type's item values.
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        let variables = &self.model.description().variables;
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let Some(index) = self.index_of(BaseType::Integer, vr) else { continue };
+            if let Kind::Enumeration { declared_type, .. } = &variables[index].kind {
+                if declared_type.item(value).is_none() {
+                    let items: Vec<String> = declared_type.items.iter().map(|i| format!("{} = {}", i.name, i.value)).collect();
+                    let name = &variables[index].name;
+                    return self.error(&format!(
+                        "fmi2SetInteger: {value} is not an item of '{name}' (type {}: {}); nothing was set",
+                        declared_type.name,
+                        items.join(", ")
+                    ));
+                }
+            }
+        }
         self.set("fmi2SetInteger", BaseType::Integer, vrs, values, |v| &mut v.integers)
     }
 
@@ -496,16 +519,38 @@ impl Instance {
         if !current.is_finite() || (current - self.time).abs() > tolerance {
             return self.error(&format!("fmi2DoStep: currentCommunicationPoint {current} differs from the FMU's time {}", self.time));
         }
+        if !self.model.description().can_handle_variable_step {
+            match self.fixed_step {
+                Some(h) if (step - h).abs() > 1e-9 * h => {
+                    return self.error(&format!(
+                        "fmi2DoStep: this FMU steps only at its first communication step size {h} s (canHandleVariableCommunicationStepSize is false), not {step} s"
+                    ));
+                }
+                Some(_) => {}
+                None => self.fixed_step = Some(step),
+            }
+        }
         match self.model.do_step(&mut self.values, current, step) {
             Ok(()) => {
                 self.time = current + step;
                 self.dirty = false;
                 Status::Ok
             }
-            Err(e) => {
-                self.phase = Phase::Error;
-                self.error(&format!("fmi2DoStep at t = {current} s: {e}"))
-            }
+            Err(e) => match e.discarded() {
+                Some(kind) => {
+                    // Nothing of the step was done: the time stays at its start, which is
+                    // the last successful time.
+                    self.phase = Phase::StepFailed;
+                    self.terminated = kind == Discard::Terminate;
+                    let what = if self.terminated { "the model asks to end the simulation" } else { "step discarded" };
+                    (self.log)(Status::Discard, "logStatusWarning", &format!("fmi2DoStep at t = {current} s: {what}: {e}"));
+                    Status::Discard
+                }
+                None => {
+                    self.phase = Phase::Error;
+                    self.error(&format!("fmi2DoStep at t = {current} s: {e}"))
+                }
+            },
         }
     }
 
@@ -515,10 +560,11 @@ impl Instance {
         Ok(self.time)
     }
 
-    /// `fmi2GetBooleanStatus(fmi2Terminated)`: this FMU never asks to stop.
+    /// `fmi2GetBooleanStatus(fmi2Terminated)`: whether the last step was discarded because
+    /// the model asks to end the simulation ([`crate::ModelError::terminate`]).
     pub fn terminated_status(&self) -> Result<bool, Status> {
         self.check_phase("fmi2GetBooleanStatus", Function::GetStatus)?;
-        Ok(false)
+        Ok(self.terminated)
     }
 
     /// `fmi2GetFMUstate`.
@@ -542,6 +588,7 @@ impl Instance {
         self.time = snapshot.time;
         self.start_time = snapshot.start_time;
         self.dirty = false;
+        self.terminated = false;
         Status::Ok
     }
 

@@ -128,7 +128,9 @@ pub mod model;
 pub mod package;
 pub mod table;
 
-pub use description::{Causality, DefaultExperiment, DescriptionError, Kind, ModelDescription, Unit, Variability, Variable};
+pub use description::{
+    Causality, DefaultExperiment, DescriptionError, EnumerationItem, EnumerationType, Kind, ModelDescription, Unit, Variability, Variable,
+};
 pub use instance::Instance;
-pub use model::{Model, ModelError, ModelFactory, StaticModel, Values};
+pub use model::{Discard, Model, ModelError, ModelFactory, StaticModel, Values};
 pub use table::{BooleanVar, IntegerVar, RealVar, StringVar, TableBuilder};

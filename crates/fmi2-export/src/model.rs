@@ -34,6 +34,9 @@ impl Values {
             match &var.kind {
                 Kind::Real { start, .. } => put(&mut v.reals, vr, start.unwrap_or(0.0)),
                 Kind::Integer { start } => put(&mut v.integers, vr, start.unwrap_or(0)),
+                Kind::Enumeration { start, declared_type } => {
+                    put(&mut v.integers, vr, start.or(declared_type.items.first().map(|i| i.value)).unwrap_or(0))
+                }
                 Kind::Boolean { start } => put(&mut v.booleans, vr, start.unwrap_or(false)),
                 Kind::String { start } => put(&mut v.strings, vr, start.clone().unwrap_or_default()),
             }
@@ -77,37 +80,71 @@ index!(IntegerVar, integers, i32);
 index!(BooleanVar, booleans, bool);
 index!(StringVar, strings, String);
 
-/// Why a model call failed. The layer logs it and returns `fmi2Error`. Any error type
-/// converts into it with `?`; [`ModelError::msg`] makes one from text.
-pub struct ModelError(Box<dyn std::error::Error + Send + Sync + 'static>);
+/// Why a model call failed. The layer logs it and returns `fmi2Error`, or `fmi2Discard` for
+/// an error made by [`ModelError::discard`] or [`ModelError::terminate`] and returned from
+/// [`Model::do_step`]. Any error type converts into it with `?`; [`ModelError::msg`] makes one
+/// from text.
+pub struct ModelError {
+    error: Box<dyn std::error::Error + Send + Sync + 'static>,
+    discard: Option<Discard>,
+}
+
+/// How a step that was not taken ends, for `fmi2Discard` (FMI 2.0, section 4.2.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Discard {
+    /// The step could not be taken; the master may restore an earlier FMU state and try
+    /// otherwise (a smaller step).
+    Retry,
+    /// The model asks to end the simulation (`fmi2Terminated` reads true).
+    Terminate,
+}
 
 impl ModelError {
     /// An error that is just a message.
     pub fn msg(message: impl fmt::Display) -> Self {
-        Self(message.to_string().into())
+        Self { error: message.to_string().into(), discard: None }
+    }
+
+    /// From [`Model::do_step`]: the step was not taken and nothing of it was done, but the
+    /// instance is sound: `fmi2DoStep` returns `fmi2Discard`, `fmi2LastSuccessfulTime` is the
+    /// step's start and `fmi2Terminated` false.
+    pub fn discard(message: impl fmt::Display) -> Self {
+        Self { error: message.to_string().into(), discard: Some(Discard::Retry) }
+    }
+
+    /// From [`Model::do_step`]: the model asks to end the simulation at the step's start (a
+    /// stop condition was reached): `fmi2DoStep` returns `fmi2Discard`,
+    /// `fmi2LastSuccessfulTime` is the step's start and `fmi2Terminated` true.
+    pub fn terminate(message: impl fmt::Display) -> Self {
+        Self { error: message.to_string().into(), discard: Some(Discard::Terminate) }
+    }
+
+    /// Whether this is a discarded step rather than a failure, and of which kind.
+    pub fn discarded(&self) -> Option<Discard> {
+        self.discard
     }
 
     /// The underlying error.
     pub fn inner(&self) -> &(dyn std::error::Error + Send + Sync + 'static) {
-        &*self.0
+        &*self.error
     }
 }
 
 impl<E: std::error::Error + Send + Sync + 'static> From<E> for ModelError {
     fn from(e: E) -> Self {
-        Self(Box::new(e))
+        Self { error: Box::new(e), discard: None }
     }
 }
 
 impl fmt::Display for ModelError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.0.fmt(f)
+        self.error.fmt(f)
     }
 }
 
 impl fmt::Debug for ModelError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        fmt::Debug::fmt(&self.0, f)
+        fmt::Debug::fmt(&self.error, f)
     }
 }
 
@@ -129,6 +166,9 @@ pub trait Model: Send {
     }
 
     /// Advances from `time` by `step` [s] with the inputs in `values`, writing the outputs.
+    /// A step the model cannot or will not take returns [`ModelError::discard`] or
+    /// [`ModelError::terminate`] (`fmi2Discard`) and leaves the state as it was; any other
+    /// error is a failure (`fmi2Error`).
     fn do_step(&mut self, values: &mut Values, time: f64, step: f64) -> Result<(), ModelError>;
 
     /// Back to the state right after instantiation (the layer restores the start values).

@@ -5,7 +5,7 @@
 //! reads and writes its variables in [`Values`](crate::Values) through these handles, so a
 //! Boolean cannot be read as a Real and a value reference is never an untyped number.
 
-use crate::description::{Causality, Kind, Unit, Variability, Variable};
+use crate::description::{Causality, EnumerationType, Kind, Unit, Variability, Variable};
 
 macro_rules! handle {
     ($(#[$doc:meta] $name:ident;)*) => {$(
@@ -87,7 +87,7 @@ impl TableBuilder {
     ) -> u32 {
         let slot = match kind {
             Kind::Real { .. } => 0,
-            Kind::Integer { .. } => 1,
+            Kind::Integer { .. } | Kind::Enumeration { .. } => 1,
             Kind::Boolean { .. } => 2,
             Kind::String { .. } => 3,
         };
@@ -125,6 +125,42 @@ impl TableBuilder {
         boolean, BooleanVar, bool, Boolean;
         /// Adds a string variable.
         string, StringVar, String, String;
+    }
+
+    /// Adds an enumeration variable of type `declared_type` (its values share the Integer
+    /// value references and are read and set as integers).
+    pub fn enumeration(
+        &mut self,
+        name: impl Into<String>,
+        causality: Causality,
+        variability: Variability,
+        declared_type: &EnumerationType,
+        start: Option<i32>,
+        description: impl Into<String>,
+    ) -> IntegerVar {
+        let kind = Kind::Enumeration { declared_type: declared_type.clone(), start };
+        IntegerVar(self.push(name, causality, variability, kind, description))
+    }
+
+    /// Adds a continuous real output that starts at `start`, a value the environment may set
+    /// before initialization (`initial="exact"`), and depends directly on the inputs in
+    /// `depends_on` after that.
+    ///
+    /// # Panics
+    /// If an entry of `depends_on` is not a real input added before.
+    pub fn output_with_start(
+        &mut self,
+        name: impl Into<String>,
+        unit: impl Into<Option<Unit>>,
+        start: f64,
+        description: impl Into<String>,
+        depends_on: &[RealVar],
+    ) -> RealVar {
+        let var = self.output(name, unit, description, depends_on);
+        if let Some(Kind::Real { start: s, .. }) = self.variables.last_mut().map(|v| &mut v.kind) {
+            *s = Some(start);
+        }
+        var
     }
 
     /// Adds a continuous real input with its start value, in `unit`.
