@@ -43,7 +43,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let record: Vec<String> = (1..=4).map(|i| format!("arm.q_{i}")).collect();
     let mut sim = system.clone().initialize(0.0, 1e-3, Algorithm::GaussSeidel, &record)?;
-    sim.run_until(5.0)?;
+    let end = sim.run_until(5.0)?;
+    if end != fmi2_cosim::RunEnd::Completed {
+        return Err(format!("the run ended early: {end:?}").into());
+    }
     println!("stepping order: {}", sim.step_order().join(" → "));
     let last = sim.rows().last().ok_or("nothing recorded")?;
     let errors: Vec<f64> = target.iter().zip(&last[1..]).map(|(t, q)| t - q).collect();
@@ -52,8 +55,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(e) = errors.iter().find(|e| e.abs() > 0.05) {
         return Err(format!("the loop did not settle: an error of {e} rad").into());
     }
-    let simulation =
-        fmi2_cosim::SimulationSpec { start: 0.0, stop: 5.0, step: 1e-3, algorithm: Algorithm::GaussSeidel, record, record_every: 1 };
+    let simulation = fmi2_cosim::SimulationSpec {
+        start: 0.0,
+        stop: 5.0,
+        step: 1e-3,
+        algorithm: Algorithm::GaussSeidel,
+        record,
+        record_every: 1,
+        on_discard: fmi2_cosim::OnDiscard::Stop,
+    };
     let ssp = dir.join("hold.ssp");
     fmi2_cosim::ssp::write_system(&system, &simulation, &ssp)?;
     println!("the loop as an SSP archive: {} (in a temporary folder unless you name one)", ssp.display());

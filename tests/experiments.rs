@@ -52,7 +52,7 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
         assert_eq!(SystemSpec::from_toml(&spec.to_toml().unwrap(), name).unwrap(), spec);
     }
     let spec = SystemSpec::from_toml(&std::fs::read_to_string(out.path().join("systems/joint_nn.toml")).unwrap(), "joint_nn").unwrap();
-    let rerun = fmi2_cosim::run(&spec, &out.path().join("systems")).unwrap();
+    let rerun = fmi2_cosim::run(&spec, &out.path().join("systems"), None).unwrap();
     assert!(rerun.error.is_none());
     let recorded = std::fs::read_to_string(out.path().join("data/joint_nn.csv")).unwrap();
     let first_after_start: Vec<f64> = recorded.lines().nth(2).unwrap().split(',').map(|x| x.parse().unwrap()).collect();

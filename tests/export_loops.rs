@@ -75,7 +75,7 @@ fn tracking_error(dir: &Path, config: &ArmConfig, compensated: bool) -> f64 {
     }
     let record: Vec<String> = (1..=n).map(|i| format!("arm.q_{i}")).collect();
     let mut sim = s.initialize(0.0, 1e-3, Algorithm::GaussSeidel, &record).unwrap();
-    sim.run_until(2.0).unwrap();
+    assert_eq!(sim.run_until(2.0).unwrap(), fmi2_cosim::RunEnd::Completed);
     // Independently of the controller: the reference from its formula, the end effector from
     // the recorded angles.
     let squares: f64 = sim

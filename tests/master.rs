@@ -38,7 +38,7 @@ fn integrator_gain_loop_is_the_discrete_exponential() {
         s.set("int", "y0", Value::Real(y0)).unwrap().set("gain", "k", Value::Real(-a)).unwrap();
         s.connect("int.y", "gain.u").unwrap().connect("gain.y", "int.u").unwrap();
         let mut sim = s.initialize(0.0, h, algorithm, &["int.y".into(), "gain.y".into()]).unwrap();
-        sim.run_until(2.0).unwrap();
+        assert_eq!(sim.run_until(2.0).unwrap(), fmi2_cosim::RunEnd::Completed);
         assert_eq!(sim.rows().len(), 201);
         for (n, row) in sim.rows().iter().enumerate() {
             let expected = y0 * (1.0 - a * h).powi(n as i32);
@@ -67,7 +67,7 @@ fn gauss_seidel_and_jacobi_differ_as_theory_says() {
         s.connect("int1.y", "int2.u").unwrap().connect("int2.y", "gain.u").unwrap().connect("gain.y", "int1.u").unwrap();
         let mut sim = s.initialize(0.0, h, algorithm, &["int1.y".into(), "int2.y".into()]).unwrap();
         assert_eq!(sim.step_order(), ["int1", "int2", "gain"]);
-        sim.run_until(10.0).unwrap();
+        assert_eq!(sim.run_until(10.0).unwrap(), fmi2_cosim::RunEnd::Completed);
         results.push(sim.take_rows());
     }
     let (gs, jacobi) = (&results[0], &results[1]);
@@ -164,7 +164,7 @@ step = 1.0
 record = ["int.y"]
 "#;
     let spec = SystemSpec::from_toml(text, "system.toml").unwrap();
-    let outcome = run(&spec, dir).unwrap();
+    let outcome = run(&spec, dir, None).unwrap();
     let e = outcome.error.expect("y overflows after a few steps");
     assert_eq!(e.unit.as_deref(), Some("int"));
     assert_eq!(e.time, Some(4.0), "y doubles each step and overflows in the fifth: {e}");

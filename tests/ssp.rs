@@ -40,6 +40,7 @@ fn loop_spec(integrator: &str) -> SystemSpec {
             algorithm: Default::default(),
             record: vec!["int.y".into(), "gain.y".into()],
             record_every: 1,
+            on_discard: fmi2_cosim::OnDiscard::Stop,
         },
     }
 }

@@ -346,6 +346,7 @@ pub(crate) fn closed_loop(
             algorithm: Algorithm::GaussSeidel,
             record: Vec::new(),
             record_every: 1,
+            on_discard: fmi2_cosim::OnDiscard::Stop,
         },
     }
 }
@@ -358,6 +359,8 @@ pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
     let sim = &spec.simulation;
     let mut run = s.initialize(sim.start, sim.step, sim.algorithm, &sim.record).map_err(master)?;
     run.record_every(sim.record_every);
+    // The paper's loops never expect a unit to stop early: a discarded step is a failure.
+    run.on_discard(fmi2_cosim::OnDiscard::Error);
     let outcome = run.run_until(sim.stop);
     let recorded = LoopRun { columns: run.columns(), rows: run.take_rows() };
     if let Some((t, column, value)) = recorded.instability() {
@@ -365,7 +368,10 @@ pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
             "the loop went unstable at t = {t:.3} s: {column} = {value:.3e} (limit ±{UNSTABLE_SPEED_RAD_S} rad/s); lower its gains"
         ));
     }
-    outcome.map_err(|e| format!("{} (at t = {:.3} s)", master(e), recorded.rows.last().map_or(sim.start, |r| r[0])))?;
+    let end = outcome.map_err(|e| format!("{} (at t = {:.3} s)", master(e), recorded.rows.last().map_or(sim.start, |r| r[0])))?;
+    if end != fmi2_cosim::RunEnd::Completed {
+        return Err(format!("the loop ended early: {end:?}"));
+    }
     Ok(recorded)
 }
 

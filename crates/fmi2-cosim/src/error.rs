@@ -17,12 +17,23 @@ pub struct MasterError {
     pub message: String,
     /// Messages the FMU logged in the failing call.
     pub log: Vec<String>,
+    /// Set when the unit discarded a step (`fmi2Discard`) rather than failed.
+    pub discard: Option<Box<DiscardedStep>>,
+}
+
+/// What a unit said when it discarded a step (`fmi2DoStep` returned `fmi2Discard`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiscardedStep {
+    /// `fmi2LastSuccessfulTime` [s], if the unit could say.
+    pub last_successful_time: Option<f64>,
+    /// `fmi2Terminated`: the unit asks to end the simulation, if it could say.
+    pub terminated: Option<bool>,
 }
 
 impl MasterError {
     /// An error with only a message.
     pub fn new(message: impl Into<String>) -> Self {
-        Self { unit: None, variable: None, time: None, message: message.into(), log: Vec::new() }
+        Self { unit: None, variable: None, time: None, message: message.into(), log: Vec::new(), discard: None }
     }
 
     /// The same error, concerning unit `unit`.

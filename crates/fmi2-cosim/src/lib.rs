@@ -45,14 +45,14 @@
 //! // The same system, simulated...
 //! let record = vec!["a.x".to_owned(), "b.x".to_owned()];
 //! let mut sim = system.clone().initialize(0.0, 1e-3, Algorithm::GaussSeidel, &record)?;
-//! sim.run_until(10.0)?;
+//! assert_eq!(sim.run_until(10.0)?, fmi2_cosim::RunEnd::Completed);
 //! let last = sim.rows().last().unwrap();
 //! let exact = (1.0 + (2f64.sqrt() * 10.0).cos()) / 2.0;
 //! assert!((last[1] - exact).abs() < 5e-3, "x_a(10) = {} vs {exact}", last[1]);
 //! assert!((last[1] + last[2] - 1.0).abs() < 5e-3, "x_a + x_b stays 1");
 //!
 //! // ...and written as an SSP 1.0 archive for other engines.
-//! let simulation = SimulationSpec { start: 0.0, stop: 10.0, step: 1e-3, algorithm: Algorithm::GaussSeidel, record, record_every: 1 };
+//! let simulation = SimulationSpec { start: 0.0, stop: 10.0, step: 1e-3, algorithm: Algorithm::GaussSeidel, record, record_every: 1, on_discard: fmi2_cosim::OnDiscard::Stop };
 //! fmi2_cosim::ssp::write_system(&system, &simulation, &dir.path().join("pair.ssp"))?;
 //! # Ok(())
 //! # }
@@ -69,9 +69,9 @@ pub mod ssp;
 pub mod system;
 mod unit;
 
-pub use error::MasterError;
-pub use interface::{BaseType, Causality, Interface, VariableInfo};
+pub use error::{DiscardedStep, MasterError};
+pub use interface::{BaseType, Causality, EnumerationInfo, Initial, Interface, Variability, VariableInfo};
 pub use recording::{run, RunOutcome};
-pub use simulation::{Handle, Simulation};
-pub use spec::{Algorithm, ConnectionSpec, FmuEntry, SimulationSpec, SystemSpec, Value};
+pub use simulation::{Handle, RunEnd, Simulation};
+pub use spec::{Algorithm, ConnectionSpec, FmuEntry, OnDiscard, SimulationSpec, SystemSpec, Value};
 pub use system::{expand_connection, Link, Setting, System, UnitPlan};

@@ -1,13 +1,17 @@
 //! What a run records: chosen variables at every (or every k-th) communication point, and a
 //! whole run from a system file with what it recorded kept even when it fails.
 
+use std::ffi::CString;
 use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 use fmi::fmi2::instance::Common;
 
 use crate::capture;
 use crate::error::MasterError;
 use crate::interface::BaseType;
+use crate::simulation::RunEnd;
 use crate::spec::SystemSpec;
 use crate::system::System;
 use crate::unit::Unit;
@@ -17,6 +21,8 @@ pub(crate) struct Recorder {
     names: Vec<String>,
     recorded: Vec<(usize, u32, BaseType)>,
     pub rows: Vec<Vec<f64>>,
+    /// Per row, the String columns' values in column order.
+    pub texts: Vec<Vec<String>>,
     /// Record every k-th communication point.
     pub every: u64,
 }
@@ -24,12 +30,17 @@ pub(crate) struct Recorder {
 impl Recorder {
     /// Records `recorded` (unit, value reference, type) under `names`.
     pub fn new(names: Vec<String>, recorded: Vec<(usize, u32, BaseType)>) -> Self {
-        Self { names, recorded, rows: Vec::new(), every: 1 }
+        Self { names, recorded, rows: Vec::new(), texts: Vec::new(), every: 1 }
     }
 
     /// "time", then the recorded variables.
     pub fn columns(&self) -> Vec<String> {
         std::iter::once("time".to_owned()).chain(self.names.iter().cloned()).collect()
+    }
+
+    /// The base type of each column, "time" (Real) first.
+    pub fn column_types(&self) -> Vec<BaseType> {
+        std::iter::once(BaseType::Real).chain(self.recorded.iter().map(|r| r.2)).collect()
     }
 
     /// Appends the row of communication point `time` [s].
@@ -38,11 +49,12 @@ impl Recorder {
             return Ok(());
         }
         let mut row = Vec::with_capacity(self.recorded.len() + 1);
+        let mut texts = Vec::new();
         row.push(time);
         for &(u, vr, base) in &self.recorded {
             let unit = &mut units[u];
             let mark = capture::mark();
-            let v = match base {
+            let v = match base.access() {
                 BaseType::Real => {
                     let mut x = [0.0];
                     unit.instance.get_real(&[vr], &mut x).map(|_| x[0])
@@ -51,35 +63,62 @@ impl Recorder {
                     let mut x = [0];
                     unit.instance.get_integer(&[vr], &mut x).map(|_| x[0] as f64)
                 }
-                _ => {
+                BaseType::Boolean => {
                     let mut x = [0];
-                    unit.instance.get_boolean(&[vr], &mut x).map(|_| x[0] as f64)
+                    unit.instance.get_boolean(&[vr], &mut x).map(|_| f64::from(x[0] != 0))
+                }
+                _ => {
+                    let mut x = [CString::default()];
+                    unit.instance.get_string(&[vr], &mut x).map(|()| {
+                        let [text] = x;
+                        texts.push(text.to_string_lossy().into_owned());
+                        f64::NAN
+                    })
                 }
             };
             row.push(v.map_err(|e| unit.fail("fmi2Get (recording)", e, mark, Some(time)))?);
         }
         self.rows.push(row);
+        self.texts.push(texts);
         Ok(())
     }
 }
 
-/// What [`run`] gives back: the recording, and the error that stopped it early, if any.
+/// What [`run`] gives back: the recording, how the run ended and what it had to say.
 pub struct RunOutcome {
     /// Column names, "time" first.
     pub columns: Vec<String>,
-    /// Rows recorded (up to the failure, if there was one).
+    /// The base type of each column.
+    pub column_types: Vec<BaseType>,
+    /// Rows recorded (up to the failure, if there was one); a String column holds NaN.
     pub rows: Vec<Vec<f64>>,
-    /// Why the run stopped before `stop`.
+    /// Per row, the String columns' values in column order.
+    pub texts: Vec<Vec<String>>,
+    /// How the run ended, if it did not fail.
+    pub end: Option<RunEnd>,
+    /// Why the run failed before `stop`.
     pub error: Option<MasterError>,
+    /// Notices of the run (a stop time it could not land on, a discarded step).
+    pub notices: Vec<String>,
 }
 
 /// Builds and runs a described system; relative paths are taken from `base`. Errors before
 /// the first step are returned as `Err`; a failure during the run keeps the rows so far.
-pub fn run(spec: &SystemSpec, base: &Path) -> Result<RunOutcome, MasterError> {
+/// `interrupt`, when raised, ends the run at the next communication point.
+pub fn run(spec: &SystemSpec, base: &Path, interrupt: Option<Arc<AtomicBool>>) -> Result<RunOutcome, MasterError> {
     let s = &spec.simulation;
     let system = System::from_spec(spec, base)?;
     let mut sim = system.initialize(s.start, s.step, s.algorithm, &s.record)?;
     sim.record_every(s.record_every);
-    let error = sim.run_until(s.stop).err();
-    Ok(RunOutcome { columns: sim.columns(), rows: sim.take_rows(), error })
+    sim.on_discard(s.on_discard);
+    if let Some(flag) = interrupt {
+        sim.interrupt_on(flag);
+    }
+    let (end, error) = match sim.run_until(s.stop) {
+        Ok(end) => (Some(end), None),
+        Err(e) => (None, Some(e)),
+    };
+    let (columns, column_types, notices) = (sim.columns(), sim.column_types(), sim.notices().to_vec());
+    let texts = sim.texts().to_vec();
+    Ok(RunOutcome { columns, column_types, rows: sim.take_rows(), texts, end, error, notices })
 }

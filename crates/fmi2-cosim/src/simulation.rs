@@ -3,9 +3,10 @@
 //!
 //! # Stepping
 //! At every communication point t_n all outputs are valid at t_n. Connections are *resolved*
-//! by walking the units so that a unit whose outputs depend directly on its inputs (direct
-//! feedthrough, from `ModelStructure/Outputs`) comes after the units that feed it; a cycle
-//! of such units is an algebraic loop and is refused.
+//! per output variable: an output that depends directly on an input (direct feedthrough,
+//! from `ModelStructure/Outputs`) is read after the output feeding that input was passed on;
+//! a cycle of such dependencies is an algebraic loop and is refused by name (see the
+//! schedule's documentation).
 //! - [`Algorithm::GaussSeidel`] (default): units step one after another; after each step its
 //!   new outputs are passed on at once, so a unit later in the order steps with its
 //!   providers' values at t_{n+1}. The order is a topological order of the connection graph;
@@ -16,17 +17,62 @@
 //! With one stateful unit in a loop (an arm and static controllers) both give the same
 //! result; with two (two integrators in a loop) Gauss–Seidel is the symplectic Euler update
 //! and Jacobi the explicit one.
+//!
+//! # Ending a run
+//! [`Simulation::run_until`] steps to a stop time and says how the run ended ([`RunEnd`]):
+//! - it lands on the stop time: when the span is not a whole number of steps, the last step
+//!   is shortened to end there, if every unit can handle a variable communication step
+//!   (`canHandleVariableCommunicationStepSize`); if one cannot, the run ends at the last whole
+//!   step before the stop time and a notice ([`Simulation::notices`]) says which unit;
+//! - a unit that discards a step (`fmi2Discard`, e.g. a model that reached its own end)
+//!   ends the run at the last communication point every unit completed, which is the last
+//!   recorded one; with [`OnDiscard::Error`] it is an error instead;
+//! - an interrupt flag ([`Simulation::interrupt_on`]) ends it at the next communication point.
+
+use std::ffi::CString;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use fmi::fmi2::instance::{CoSimulation, Common};
+use fmi::fmi2::Fmi2Error;
 
 use crate::capture;
-use crate::error::MasterError;
+use crate::error::{DiscardedStep, MasterError};
 use crate::interface::{BaseType, Causality};
 use crate::recording::Recorder;
 use crate::schedule::Schedule;
-use crate::spec::{Algorithm, Value};
+use crate::spec::{Algorithm, OnDiscard, Value};
 use crate::system::{check_value, split_name, System};
 use crate::unit::Unit;
+
+/// Steps shorter than this fraction of the communication step are not taken: the stop time
+/// counts as reached.
+const STEP_TOLERANCE: f64 = 1e-9;
+
+/// How a call of [`Simulation::run_until`] ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RunEnd {
+    /// At the stop time, or at the last whole step before it when a unit cannot shorten its
+    /// last step (then [`Simulation::notices`] says so).
+    Completed,
+    /// A unit discarded a step; the run ended at the last communication point every unit
+    /// completed.
+    Discarded {
+        /// The unit that discarded.
+        unit: String,
+        /// The communication point the discarded step started from [s]: where the run ended.
+        time: f64,
+        /// What the unit said.
+        status: DiscardedStep,
+        /// What it logged in the call.
+        log: Vec<String>,
+    },
+    /// The interrupt flag was raised; the run ended at `time` [s].
+    Interrupted {
+        /// The last communication point [s].
+        time: f64,
+    },
+}
 
 /// A system being simulated. The recorded rows stay available whatever happens.
 pub struct Simulation {
@@ -34,11 +80,18 @@ pub struct Simulation {
     units: Vec<Unit>,
     schedule: Schedule,
     time: f64,
-    start: f64,
+    /// The communication point whole steps are counted from [s]: the start, or the end of
+    /// the last shortened step.
+    anchor: f64,
     step: f64,
     steps_taken: u64,
     algorithm: Algorithm,
     recorder: Recorder,
+    on_discard: OnDiscard,
+    /// Why no more steps can be taken, once a unit discarded one.
+    ended: Option<MasterError>,
+    interrupt: Option<Arc<AtomicBool>>,
+    notices: Vec<String>,
 }
 
 /// A resolved Real variable of a running simulation.
@@ -56,18 +109,34 @@ impl System {
         if !(step > 0.0 && step.is_finite()) {
             return Err(MasterError::new(format!("the communication step must be positive, not {step}")));
         }
+        if !start.is_finite() {
+            return Err(MasterError::new(format!("the start time must be finite, not {start}")));
+        }
         let schedule = Schedule::new(&self)?;
         let recorder = Recorder::new(record.to_vec(), self.recordable(record)?);
         let units = self.units().iter().map(Unit::load).collect::<Result<Vec<_>, _>>()?;
-        let mut sim = Simulation { system: self, units, schedule, time: start, step, steps_taken: 0, start, algorithm, recorder };
-        sim.start_up()?;
+        let mut sim = Simulation {
+            system: self,
+            units,
+            schedule,
+            time: start,
+            anchor: start,
+            step,
+            steps_taken: 0,
+            algorithm,
+            recorder,
+            on_discard: OnDiscard::default(),
+            ended: None,
+            interrupt: None,
+            notices: Vec::new(),
+        };
+        sim.start_up(start)?;
         Ok(sim)
     }
 }
 
 impl Simulation {
-    fn start_up(&mut self) -> Result<(), MasterError> {
-        let start = self.start;
+    fn start_up(&mut self, start: f64) -> Result<(), MasterError> {
         for u in &mut self.units {
             let mark = capture::mark();
             u.instance.setup_experiment(None, start, None).map_err(|e| u.fail("fmi2SetupExperiment", e, mark, None))?;
@@ -91,19 +160,22 @@ impl Simulation {
         Ok(())
     }
 
+    /// Sets variable `name` of unit `ui` to `value`, checked and converted for its type.
     fn set_value(&mut self, ui: usize, name: &str, value: &Value) -> Result<(), MasterError> {
-        let info = self.system.units()[ui].variable(name)?;
+        let plan = &self.system.units()[ui];
+        let info = plan.variable(name)?;
+        let value = check_value(&plan.interface, info, value).map_err(|m| MasterError::new(m).unit(&plan.name).variable(name))?;
         let (vr, base) = ([info.value_reference], info.base);
         let unit = &mut self.units[ui];
         let mark = capture::mark();
-        let r = match value {
+        let r = match &value {
             Value::Real(x) => unit.instance.set_real(&vr, &[*x]).map(|_| ()),
             Value::Integer(i) if base == BaseType::Real => unit.instance.set_real(&vr, &[*i as f64]).map(|_| ()),
             Value::Integer(i) => unit.instance.set_integer(&vr, &[*i as i32]).map(|_| ()),
             Value::Boolean(b) => unit.instance.set_boolean(&vr, &[*b as i32]).map(|_| ()),
             Value::String(s) => {
-                let c = std::ffi::CString::new(s.as_str())
-                    .map_err(|_| MasterError::new("a string holds a NUL byte").unit(&unit.name).variable(name))?;
+                let c =
+                    CString::new(s.as_str()).map_err(|_| MasterError::new("a string holds a NUL byte").unit(&unit.name).variable(name))?;
                 unit.instance.set_string(&vr, &[c])
             }
         };
@@ -114,42 +186,47 @@ impl Simulation {
         })
     }
 
-    /// Passes the outputs of the dirty units on, in resolve order; a target whose outputs
-    /// follow its inputs becomes dirty in turn, unless (in a Gauss–Seidel sweep, `position`
-    /// being the step position just done) it will step later and nobody needs it before.
+    /// Passes on the outputs of the dirty passes, in resolve order; a pass whose outputs
+    /// follow inputs it just received becomes dirty in turn, unless (in a Gauss–Seidel sweep,
+    /// `position` being the step position just done) its unit steps later and nobody needs
+    /// its outputs before.
     fn resolve_dirty(&mut self, time: Option<f64>, position: Option<usize>) -> Result<(), MasterError> {
-        for i in 0..self.schedule.resolve_order.len() {
-            let u = self.schedule.resolve_order[i];
-            if !self.schedule.dirty[u] {
+        for p in 0..self.schedule.passes.len() {
+            if !self.schedule.dirty[p] {
                 continue;
             }
-            self.schedule.dirty[u] = false;
-            if self.schedule.transfers[u].is_empty() {
-                continue;
-            }
+            self.schedule.dirty[p] = false;
             let plan = &mut self.schedule;
             let units = &mut self.units;
+            let pass = &plan.passes[p];
+            let u = pass.unit;
             let mark = capture::mark();
-            let (nr, ni, nb) = (plan.out_real[u].len(), plan.out_int[u].len(), plan.out_bool[u].len());
-            if nr > 0 {
+            let [reals, ints, bools, strings] = &pass.reads;
+            if !reals.is_empty() {
                 units[u]
                     .instance
-                    .get_real(&plan.out_real[u], &mut plan.buf_real[..nr])
+                    .get_real(reals, &mut plan.buf_real[..reals.len()])
                     .map_err(|e| units[u].fail("fmi2GetReal", e, mark, time))?;
             }
-            if ni > 0 {
+            if !ints.is_empty() {
                 units[u]
                     .instance
-                    .get_integer(&plan.out_int[u], &mut plan.buf_int[..ni])
+                    .get_integer(ints, &mut plan.buf_int[..ints.len()])
                     .map_err(|e| units[u].fail("fmi2GetInteger", e, mark, time))?;
             }
-            if nb > 0 {
+            if !bools.is_empty() {
                 units[u]
                     .instance
-                    .get_boolean(&plan.out_bool[u], &mut plan.buf_bool[..nb])
+                    .get_boolean(bools, &mut plan.buf_bool[..bools.len()])
                     .map_err(|e| units[u].fail("fmi2GetBoolean", e, mark, time))?;
             }
-            for t in &plan.transfers[u] {
+            if !strings.is_empty() {
+                units[u]
+                    .instance
+                    .get_string(strings, &mut plan.buf_str[..strings.len()])
+                    .map_err(|e| units[u].fail("fmi2GetString", e, mark, time))?;
+            }
+            for t in &pass.transfers {
                 let m = t.vrs.len();
                 let target = &mut units[t.to];
                 let r = match t.base {
@@ -157,19 +234,25 @@ impl Simulation {
                         for (v, &k) in plan.set_real.iter_mut().zip(&t.from) {
                             *v = plan.buf_real[k];
                         }
-                        target.instance.set_real(&t.vrs, &plan.set_real[..m])
+                        target.instance.set_real(&t.vrs, &plan.set_real[..m]).map(|_| ())
                     }
                     BaseType::Integer => {
                         for (v, &k) in plan.set_int.iter_mut().zip(&t.from) {
                             *v = plan.buf_int[k];
                         }
-                        target.instance.set_integer(&t.vrs, &plan.set_int[..m])
+                        target.instance.set_integer(&t.vrs, &plan.set_int[..m]).map(|_| ())
                     }
-                    _ => {
+                    BaseType::Boolean => {
                         for (v, &k) in plan.set_bool.iter_mut().zip(&t.from) {
                             *v = plan.buf_bool[k];
                         }
-                        target.instance.set_boolean(&t.vrs, &plan.set_bool[..m])
+                        target.instance.set_boolean(&t.vrs, &plan.set_bool[..m]).map(|_| ())
+                    }
+                    _ => {
+                        for (v, &k) in plan.set_str.iter_mut().zip(&t.from) {
+                            v.clone_from(&plan.buf_str[k]);
+                        }
+                        target.instance.set_string(&t.vrs, &plan.set_str[..m])
                     }
                 };
                 r.map_err(|e| {
@@ -177,16 +260,18 @@ impl Simulation {
                         .system
                         .links()
                         .iter()
-                        .filter(|l| l.to_unit == t.to && l.base == t.base && t.vrs.contains(&l.to_vr))
+                        .filter(|l| l.to_unit == t.to && l.base.access() == t.base && t.vrs.contains(&l.to_vr))
                         .map(|l| l.to_variable.as_str())
                         .collect();
                     target.fail("fmi2Set (connection)", e, mark, time).variable(&names.join(", "))
                 })?;
             }
-            for g in 0..self.schedule.transfers[u].len() {
-                let (to, feeds) = (self.schedule.transfers[u][g].to, self.schedule.transfers[u][g].feeds);
-                if feeds && !self.schedule.can_wait(to, position) {
-                    self.schedule.dirty[to] = true;
+            for t in 0..self.schedule.passes[p].transfers.len() {
+                for w in 0..self.schedule.passes[p].transfers[t].wakes.len() {
+                    let q = self.schedule.passes[p].transfers[t].wakes[w];
+                    if !self.schedule.can_wait(q, position) {
+                        self.schedule.dirty[q] = true;
+                    }
                 }
             }
         }
@@ -198,52 +283,154 @@ impl Simulation {
         self.resolve_dirty(time, None)
     }
 
-    /// Records every `k`-th communication point only (k ≥ 1; the first is always recorded).
+    /// Records every `k`-th communication point only (k ≥ 1; the first is always recorded,
+    /// and so is the stop time when the last step was shortened to land on it).
     pub fn record_every(&mut self, k: u64) {
         self.recorder.every = k.max(1);
     }
 
-    /// One communication step from the current time.
+    /// What a unit discarding a step does to a run: end it (the default) or fail it.
+    pub fn on_discard(&mut self, policy: OnDiscard) {
+        self.on_discard = policy;
+    }
+
+    /// Ends [`Simulation::run_until`] at the next communication point once `flag` is raised
+    /// (e.g. from a Ctrl-C handler); the rows so far are kept.
+    pub fn interrupt_on(&mut self, flag: Arc<AtomicBool>) {
+        self.interrupt = Some(flag);
+    }
+
+    /// What the run had to tell beyond its rows (a stop time it could not land on, a unit
+    /// that discarded a step), in order.
+    pub fn notices(&self) -> &[String] {
+        &self.notices
+    }
+
+    /// One communication step from the current time. After a unit discarded a step the
+    /// system cannot go on, and every further call is an error.
     pub fn step(&mut self) -> Result<(), MasterError> {
-        let t = self.time;
-        let h = self.step;
-        match self.algorithm {
-            Algorithm::GaussSeidel => {
-                for i in 0..self.schedule.step_order.len() {
-                    let u = self.schedule.step_order[i];
-                    self.do_step(u, t, h)?;
-                    self.schedule.dirty[u] = true;
-                    self.resolve_dirty(Some(t), Some(i))?;
-                }
-            }
-            Algorithm::Jacobi => {
-                for u in 0..self.units.len() {
-                    self.do_step(u, t, h)?;
-                }
-                self.resolve_all(Some(t))?;
-            }
-        }
+        self.step_by(self.step)?;
         self.steps_taken += 1;
         // Times from the step count, so long runs do not accumulate rounding.
-        self.time = self.start + self.steps_taken as f64 * h;
+        self.time = self.anchor + self.steps_taken as f64 * self.step;
         if self.steps_taken % self.recorder.every == 0 {
             self.recorder.record(&mut self.units, self.time)?;
         }
         Ok(())
     }
 
+    /// Every unit steps by `h` [s] from the current time, connections resolved as the
+    /// algorithm says; the time is not advanced.
+    fn step_by(&mut self, h: f64) -> Result<(), MasterError> {
+        if let Some(e) = &self.ended {
+            let mut e = e.clone();
+            e.message = format!("the run has ended and cannot step on: {}", e.message);
+            return Err(e);
+        }
+        let t = self.time;
+        let result = match self.algorithm {
+            Algorithm::GaussSeidel => (|| {
+                for i in 0..self.schedule.step_order.len() {
+                    let u = self.schedule.step_order[i];
+                    self.do_step(u, t, h)?;
+                    self.schedule.touch_unit(u);
+                    self.resolve_dirty(Some(t), Some(i))?;
+                }
+                Ok(())
+            })(),
+            Algorithm::Jacobi => (|| {
+                for u in 0..self.units.len() {
+                    self.do_step(u, t, h)?;
+                }
+                self.resolve_all(Some(t))
+            })(),
+        };
+        if let Err(e) = &result {
+            if e.discard.is_some() {
+                self.ended = Some(e.clone());
+            }
+        }
+        result
+    }
+
     fn do_step(&mut self, u: usize, t: f64, h: f64) -> Result<(), MasterError> {
         let unit = &mut self.units[u];
         let mark = capture::mark();
-        unit.instance.do_step(t, h, true).map(|_| ()).map_err(|e| unit.fail("fmi2DoStep", e, mark, Some(t)))
+        match unit.instance.do_step(t, h, true) {
+            Ok(_) => Ok(()),
+            Err(Fmi2Error::Discard) => {
+                let status = DiscardedStep {
+                    last_successful_time: unit.instance.last_successful_time().ok(),
+                    terminated: unit.instance.terminated().ok(),
+                };
+                let mut e = unit.fail("fmi2DoStep", Fmi2Error::Discard, mark, Some(t));
+                e.message = match (status.terminated, status.last_successful_time) {
+                    (Some(true), _) => {
+                        "the unit asks to end the simulation (fmi2DoStep returned fmi2Discard, fmi2Terminated is true)".into()
+                    }
+                    (_, Some(last)) => format!(
+                        "fmi2DoStep returned fmi2Discard: the step from {t} s by {h} s was not completed (last successful time {last} s)"
+                    ),
+                    _ => format!("fmi2DoStep returned fmi2Discard: the step from {t} s by {h} s was not completed"),
+                };
+                e.discard = Some(Box::new(status));
+                Err(e)
+            }
+            Err(e) => Err(unit.fail("fmi2DoStep", e, mark, Some(t))),
+        }
     }
 
-    /// Steps until `stop` [s] (to within a thousandth of a step).
-    pub fn run_until(&mut self, stop: f64) -> Result<(), MasterError> {
-        while self.time + 1e-3 * self.step < stop {
-            self.step()?;
+    /// Steps until `stop` [s]: whole communication steps, and a last shorter one that lands on
+    /// `stop` when the span is not a whole number of steps and every unit can handle a
+    /// variable step (else the run ends at the last whole step and a notice says why). A unit
+    /// that discards a step ends the run there ([`RunEnd::Discarded`], the rows so far kept)
+    /// unless [`OnDiscard::Error`] makes it an error; a raised interrupt flag ends it at the
+    /// next communication point.
+    pub fn run_until(&mut self, stop: f64) -> Result<RunEnd, MasterError> {
+        loop {
+            let remaining = stop - self.time;
+            if remaining <= STEP_TOLERANCE * self.step {
+                return Ok(RunEnd::Completed);
+            }
+            if self.interrupt.as_ref().is_some_and(|f| f.load(Ordering::Relaxed)) {
+                return Ok(RunEnd::Interrupted { time: self.time });
+            }
+            let outcome = if remaining >= (1.0 - STEP_TOLERANCE) * self.step {
+                self.step()
+            } else {
+                if let Some(u) = self.system.units().iter().find(|u| !u.interface.can_handle_variable_step) {
+                    self.notices.push(format!(
+                        "the run ends at t = {} s, {remaining} s before the stop time {stop} s: unit '{}' cannot take a shorter last step (canHandleVariableCommunicationStepSize is false)",
+                        self.time, u.name
+                    ));
+                    return Ok(RunEnd::Completed);
+                }
+                self.step_by(remaining).and_then(|()| {
+                    self.time = stop;
+                    self.anchor = stop;
+                    self.steps_taken = 0;
+                    self.recorder.record(&mut self.units, self.time)
+                })
+            };
+            match outcome {
+                Ok(()) => {}
+                Err(e) if e.discard.is_some() && self.on_discard == OnDiscard::Stop => {
+                    let unit = e.unit.clone().unwrap_or_default();
+                    let status = *e.discard.clone().expect("checked");
+                    let terminated = match status.terminated {
+                        Some(true) => "it asks to end the simulation",
+                        Some(false) => "it does not ask to end the simulation",
+                        None => "it could not say why",
+                    };
+                    self.notices.push(format!(
+                        "unit '{unit}' discarded the step from t = {} s ({terminated}); the run ends at t = {} s, the last communication point every unit completed",
+                        self.time, self.time
+                    ));
+                    return Ok(RunEnd::Discarded { unit, time: self.time, status, log: e.log });
+                }
+                Err(e) => return Err(e),
+            }
         }
-        Ok(())
     }
 
     /// The current communication point [s].
@@ -269,12 +456,11 @@ impl Simulation {
         let (u, v) = split_name(full)?;
         let ui = self.system.unit_index(u)?;
         let info = self.system.units()[ui].variable(v)?;
-        check_value(info, &value).map_err(|m| MasterError::new(m).unit(u).variable(v))?;
         if self.system.is_connected(ui, info.value_reference, info.base) {
             return Err(MasterError::new("this input is connected; the connection sets it").unit(u).variable(v));
         }
         self.set_value(ui, v, &value).map_err(|e| e.at(self.time))?;
-        self.schedule.dirty[ui] = true;
+        self.schedule.touch_unit(ui);
         self.resolve_dirty(Some(self.time), None)
     }
 
@@ -302,7 +488,7 @@ impl Simulation {
             }
             let mark = capture::mark();
             unit.instance.set_real(&[h.value_reference], &[x]).map_err(|e| unit.fail("fmi2SetReal", e, mark, Some(self.time)))?;
-            self.schedule.dirty[h.unit] = true;
+            self.schedule.touch_unit(h.unit);
         }
         self.resolve_dirty(Some(self.time), None)
     }
@@ -325,13 +511,25 @@ impl Simulation {
         self.recorder.columns()
     }
 
-    /// The recorded rows (time first).
+    /// The base type of each column ("time" is Real).
+    pub fn column_types(&self) -> Vec<BaseType> {
+        self.recorder.column_types()
+    }
+
+    /// The recorded rows (time first). Integer, Boolean (0 or 1) and enumeration values are
+    /// exact in an f64; a String column holds NaN here and its text in [`Self::texts`].
     pub fn rows(&self) -> &[Vec<f64>] {
         &self.recorder.rows
     }
 
+    /// Per recorded row, the values of the String columns in column order.
+    pub fn texts(&self) -> &[Vec<String>] {
+        &self.recorder.texts
+    }
+
     /// Takes the recorded rows out, leaving none.
     pub fn take_rows(&mut self) -> Vec<Vec<f64>> {
+        self.recorder.texts.clear();
         std::mem::take(&mut self.recorder.rows)
     }
 

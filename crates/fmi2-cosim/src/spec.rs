@@ -26,7 +26,26 @@ impl Algorithm {
     }
 }
 
-/// A value to set: the base type follows the variable, with integers accepted for reals.
+/// What a unit that discards a step (`fmi2Discard`) does to a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OnDiscard {
+    /// End the run at the last communication point every unit completed, keeping the rows,
+    /// with a notice: what fmpy, fmusim and fmi-sim do.
+    #[default]
+    Stop,
+    /// Fail the run (the rows so far are still kept).
+    Error,
+}
+
+impl OnDiscard {
+    fn is_default(&self) -> bool {
+        *self == OnDiscard::Stop
+    }
+}
+
+/// A value to set: the base type follows the variable, with integers accepted for reals and
+/// an enumeration taking an item's value (an integer) or name (a string).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum Value {
@@ -112,6 +131,9 @@ pub struct SimulationSpec {
     /// Record every k-th communication point.
     #[serde(default = "one")]
     pub record_every: u64,
+    /// What a unit discarding a step does: `"stop"` (default) or `"error"`.
+    #[serde(default, skip_serializing_if = "OnDiscard::is_default")]
+    pub on_discard: OnDiscard,
 }
 
 fn one() -> u64 {

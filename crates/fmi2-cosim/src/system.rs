@@ -39,15 +39,19 @@ pub struct Link {
     pub from_variable: String,
     /// Its value reference.
     pub from_vr: u32,
+    /// Its position in the source's [`Interface::variables`].
+    pub from_index: usize,
     /// Index of the target unit.
     pub to_unit: usize,
     /// Name of the input.
     pub to_variable: String,
     /// Its value reference.
     pub to_vr: u32,
+    /// Its position in the target's [`Interface::variables`].
+    pub to_index: usize,
     /// The base type of both.
     pub base: BaseType,
-    /// The input feeds an output of its unit directly.
+    /// The input feeds some output of its unit directly.
     pub feeds_through: bool,
 }
 
@@ -76,30 +80,60 @@ pub(crate) fn split_name(full: &str) -> Result<(&str, &str), MasterError> {
     full.split_once('.').ok_or_else(|| MasterError::new(format!("'{full}' must be written as unit.variable")))
 }
 
-/// Checks that `value` fits the variable's base type (integers may set reals).
-pub(crate) fn check_value(info: &VariableInfo, value: &Value) -> Result<(), String> {
+/// Checks that `value` fits variable `info` of `interface` and gives what is passed to the
+/// FMU: integers may set reals; an enumeration takes one of its items, by value or by name.
+pub(crate) fn check_value(interface: &Interface, info: &VariableInfo, value: &Value) -> Result<Value, String> {
     let ok = matches!(
         (info.base, value),
         (BaseType::Real, Value::Real(_) | Value::Integer(_))
             | (BaseType::Integer, Value::Integer(_))
+            | (BaseType::Enumeration, Value::Integer(_) | Value::String(_))
             | (BaseType::Boolean, Value::Boolean(_))
             | (BaseType::String, Value::String(_))
     );
     if !ok {
         return Err(format!("type mismatch: the variable is {:?}, the value {value:?}", info.base));
     }
-    if let Value::Integer(i) = value {
-        if info.base == BaseType::Integer && i32::try_from(*i).is_err() {
-            return Err(format!("{i} does not fit an fmi2Integer"));
+    match (info.base, value) {
+        (BaseType::Real, Value::Integer(i)) => Ok(Value::Real(*i as f64)),
+        (BaseType::Integer, Value::Integer(i)) if i32::try_from(*i).is_err() => Err(format!("{i} does not fit an fmi2Integer")),
+        (BaseType::Enumeration, _) => {
+            let items = interface.enumeration_of(info).map_or(&[][..], |e| &e.items[..]);
+            let found = items.iter().find(|(name, v)| match value {
+                Value::Integer(i) => v == i,
+                Value::String(s) => name == s,
+                _ => false,
+            });
+            match found {
+                Some((_, v)) => Ok(Value::Integer(*v)),
+                None => {
+                    let listed: Vec<String> = items.iter().map(|(n, v)| format!("{n} = {v}")).collect();
+                    Err(format!(
+                        "{value:?} is not an item of type {} ({})",
+                        info.declared_type.as_deref().unwrap_or("?"),
+                        listed.join(", ")
+                    ))
+                }
+            }
         }
+        (BaseType::String, Value::String(s)) if s.contains('\0') => Err("a string holds a NUL byte".into()),
+        _ => Ok(value.clone()),
     }
-    Ok(())
+}
+
+/// Whether a `*` pattern part may capture `text`: characters without `_` or `.` (possibly
+/// none), so `q_*` matches `q_1` and `q_tip` but never the longer name `q_meas_1`, and `y*`
+/// matches `y` and `y2`.
+fn capturable(text: &str) -> bool {
+    !text.contains(['_', '.'])
 }
 
 /// The (output, input) variable pairs a connection from `from_var` of one unit to `to_var`
 /// of another stands for, given the names of the source's outputs. With a `*` in both names,
-/// every output whose name has the text before and after the `*` (sorted by name), mapped to
-/// the target name with the same text in place of its `*`; with none, the one pair as given.
+/// every output that is the text before the `*`, a captured part, and the text after it
+/// (sorted by name), mapped to the target name with the same part in place of its `*`; the
+/// captured part holds no `_` or `.` (and may be empty), so a pattern never captures a longer
+/// name (`arm.q_*` matches `q_1`, not `q_meas_1`). With no `*`, the one pair as given.
 /// `from` and `to` are the full names, for messages.
 pub fn expand_connection<'a>(
     from: &str,
@@ -108,14 +142,20 @@ pub fn expand_connection<'a>(
     to_var: &str,
     outputs: impl IntoIterator<Item = &'a str>,
 ) -> Result<Vec<(String, String)>, String> {
+    if from_var.matches('*').count() > 1 || to_var.matches('*').count() > 1 {
+        return Err(format!("'{from}' → '{to}': a name holds at most one '*'"));
+    }
     match (from_var.split_once('*'), to_var.split_once('*')) {
         (Some((fp, fs)), Some((tp, ts))) => {
-            let mut names: Vec<&str> =
-                outputs.into_iter().filter(|n| n.len() >= fp.len() + fs.len() && n.starts_with(fp) && n.ends_with(fs)).collect();
+            let mut names: Vec<&str> = outputs
+                .into_iter()
+                .filter(|n| n.len() >= fp.len() + fs.len() && n.starts_with(fp) && n.ends_with(fs))
+                .filter(|n| capturable(&n[fp.len()..n.len() - fs.len()]))
+                .collect();
             names.sort_unstable();
             names.dedup();
             if names.is_empty() {
-                return Err(format!("no output matches '{from_var}'"));
+                return Err(format!("no output matches '{from_var}' ('*' stands for a part without '_' or '.')"));
             }
             Ok(names.into_iter().map(|n| (n.to_owned(), format!("{tp}{}{ts}", &n[fp.len()..n.len() - fs.len()]))).collect())
         }
@@ -165,18 +205,28 @@ impl System {
 
     /// Whether input `vr` of base type `base` of unit `unit` is set by a connection.
     pub fn is_connected(&self, unit: usize, vr: u32, base: BaseType) -> bool {
-        self.links.iter().any(|l| l.to_unit == unit && l.to_vr == vr && l.base == base)
+        self.links.iter().any(|l| l.to_unit == unit && l.to_vr == vr && l.base.access() == base.access())
     }
 
-    /// Sets a parameter (or an unconnected input's value) before initialisation; setting a
-    /// variable again replaces its value.
+    /// Sets a variable's value before initialisation: a parameter, an unconnected input, or
+    /// any other variable the standard lets a master set then (not constant, `initial` exact
+    /// or approx: e.g. an output with a start value). An enumeration takes an item's value or
+    /// name. Setting a variable again replaces its value.
     pub fn set(&mut self, unit: &str, variable: &str, value: Value) -> Result<&mut Self, MasterError> {
         let u = self.unit_index(unit)?;
         let info = self.units[u].variable(variable)?;
-        check_value(info, &value).map_err(|m| MasterError::new(m).unit(unit).variable(variable))?;
-        if !matches!(info.causality, Causality::Parameter | Causality::Input) {
+        check_value(&self.units[u].interface, info, &value).map_err(|m| MasterError::new(m).unit(unit).variable(variable))?;
+        if !info.settable_before_initialization() {
             let what = info.causality.with_article();
-            return Err(MasterError::new(format!("{what} cannot be set; only parameters and inputs")).unit(unit).variable(variable));
+            let why = match info.causality {
+                Causality::Independent => "the independent variable cannot be set".to_owned(),
+                _ if info.variability == crate::interface::Variability::Constant => format!("{what} that is constant cannot be set"),
+                _ => format!(
+                    "{what} cannot be set (its initial is {}); a master sets inputs and variables with initial exact or approx (parameters, outputs with a start value)",
+                    format!("{:?}", info.initial).to_lowercase()
+                ),
+            };
+            return Err(MasterError::new(why).unit(unit).variable(variable));
         }
         match self.settings.iter_mut().find(|s| s.unit == u && s.variable == variable) {
             Some(s) => s.value = value,
@@ -212,25 +262,41 @@ impl System {
                 let what = dst.causality.with_article();
                 return Err(MasterError::new(format!("a connection must end at an input, not {what}")).unit(tu).variable(&tv));
             }
-            if src.base != dst.base || !src.base.is_connectable() {
+            if src.base != dst.base {
                 return Err(MasterError::new(format!(
-                    "type mismatch: {fu}.{fv} is {:?}, {tu}.{tv} is {:?} (Real, Integer and Boolean connect to their own type)",
+                    "type mismatch: {fu}.{fv} is {:?}, {tu}.{tv} is {:?} (each type connects to its own)",
                     src.base, dst.base
                 ))
                 .unit(tu)
                 .variable(&tv));
             }
-            if self.is_connected(ti, dst.value_reference, dst.base) {
+            if src.base == BaseType::Enumeration {
+                let from_items = self.units[fi].interface.enumeration_of(src).map_or(&[][..], |e| &e.items[..]);
+                let to_items = self.units[ti].interface.enumeration_of(dst).map_or(&[][..], |e| &e.items[..]);
+                if let Some((name, value)) = from_items.iter().find(|(_, v)| !to_items.iter().any(|(_, w)| w == v)) {
+                    return Err(MasterError::new(format!(
+                        "{fu}.{fv} may give {name} = {value}, which is no item of the input's type {}",
+                        dst.declared_type.as_deref().unwrap_or("?")
+                    ))
+                    .unit(tu)
+                    .variable(&tv));
+                }
+            }
+            if self.is_connected(ti, dst.value_reference, dst.base) || added.iter().any(|l| l.to_unit == ti && l.to_variable == tv) {
                 return Err(MasterError::new("this input is already connected").unit(tu).variable(&tv));
             }
-            let feeds_through = self.units[ti].interface.feedthrough_inputs.contains(&dst.value_reference);
+            let (from_index, to_index) =
+                (self.units[fi].interface.index(&fv).expect("found above"), self.units[ti].interface.index(&tv).expect("found above"));
+            let feeds_through = self.units[ti].interface.variables.iter().any(|v| v.direct_inputs.contains(&to_index));
             added.push(Link {
                 from_unit: fi,
                 from_variable: fv,
                 from_vr: src.value_reference,
+                from_index,
                 to_unit: ti,
                 to_variable: tv,
                 to_vr: dst.value_reference,
+                to_index,
                 base: src.base,
                 feeds_through,
             });
@@ -247,9 +313,6 @@ impl System {
                 let (u, v) = split_name(full)?;
                 let ui = self.unit_index(u)?;
                 let info = self.units[ui].variable(v)?;
-                if !info.base.is_connectable() {
-                    return Err(MasterError::new("only Real, Integer and Boolean variables can be recorded").unit(u).variable(v));
-                }
                 Ok((ui, info.value_reference, info.base))
             })
             .collect()
@@ -283,16 +346,19 @@ mod tests {
 
     #[test]
     fn wildcards_expand_to_sorted_pairs() {
-        let outputs = ["q_1", "q_2", "qd_1", "tau_1", "q_"];
+        let outputs = ["q_1", "q_2", "qd_1", "tau_1", "q_", "q_meas_1", "q_tip", "q_1.x"];
         let pairs = expand_connection("a.q_*", "b.x_*_in", "q_*", "x_*_in", outputs).unwrap();
-        assert_eq!(
-            pairs,
-            [("q_".to_owned(), "x__in".to_owned()), ("q_1".to_owned(), "x_1_in".to_owned()), ("q_2".to_owned(), "x_2_in".to_owned())]
-        );
+        let owned = |v: &[(&str, &str)]| v.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect::<Vec<_>>();
+        // q_ (nothing captured) too, but not q_meas_1 or q_1.x (longer names).
+        assert_eq!(pairs, owned(&[("q_", "x__in"), ("q_1", "x_1_in"), ("q_2", "x_2_in"), ("q_tip", "x_tip_in")]));
+        let pairs = expand_connection("a.q_meas_*", "b.q_*", "q_meas_*", "q_*", outputs).unwrap();
+        assert_eq!(pairs, owned(&[("q_meas_1", "q_1")]));
         let e = expand_connection("a.z*", "b.z*", "z*", "z*", outputs).unwrap_err();
         assert!(e.contains("no output matches 'z*'"), "{e}");
         let e = expand_connection("a.q_*", "b.u", "q_*", "u", outputs).unwrap_err();
         assert!(e.contains("in both names or in neither"), "{e}");
-        assert_eq!(expand_connection("a.y", "b.u", "y", "u", outputs).unwrap(), [("y".to_owned(), "u".to_owned())]);
+        let e = expand_connection("a.*_*", "b.*_*", "*_*", "*_*", outputs).unwrap_err();
+        assert!(e.contains("at most one '*'"), "{e}");
+        assert_eq!(expand_connection("a.y", "b.u", "y", "u", outputs).unwrap(), owned(&[("y", "u")]));
     }
 }

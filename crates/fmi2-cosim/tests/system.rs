@@ -27,6 +27,7 @@ fn simulation(record: &[&str]) -> SimulationSpec {
         algorithm: Algorithm::Jacobi,
         record: record.iter().map(|s| s.to_string()).collect(),
         record_every: 1,
+        on_discard: fmi2_cosim::OnDiscard::Stop,
     }
 }
 
@@ -78,7 +79,7 @@ fn the_same_checked_system_runs() {
     system.add_fmu("osc", &fmu).unwrap();
     system.set("osc", "mu", Value::Real(0.0)).unwrap().set("osc", "x0", Value::Real(1.0)).unwrap();
     let mut sim = system.initialize(0.0, 0.01, Algorithm::GaussSeidel, &["osc.x".into(), "osc.v".into()]).unwrap();
-    sim.run_until(3.0).unwrap();
+    assert_eq!(sim.run_until(3.0).unwrap(), fmi2_cosim::RunEnd::Completed);
     // Alone and unforced, with mu = 0: x = cos t, v = −sin t, integrated by the FMU's RK4.
     for row in sim.rows() {
         assert!((row[1] - row[0].cos()).abs() < 1e-9 && (row[2] + row[0].sin()).abs() < 1e-9, "{row:?}");
