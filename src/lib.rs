@@ -14,4 +14,5 @@ pub mod logs;
 pub mod plan;
 pub mod report;
 pub mod simulate;
+pub mod system_run;
 pub mod table;

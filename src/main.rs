@@ -64,9 +64,16 @@ enum Command {
         base_angle: Option<f64>,
         #[command(flatten)]
         arm: ArmSource,
-        /// Output trajectory CSV; written only if the whole simulation succeeds.
+        /// Output trajectory CSV; written only if the whole simulation succeeds. For a system
+        /// file, the recording, written also when a unit fails, discards a step or Ctrl-C ends
+        /// the run (then with the rows so far).
         #[arg(long, short = 'o')]
         output: PathBuf,
+        /// For a system file: what a unit that discards a step (fmi2Discard) does, `stop` (end
+        /// the run there with a notice, exit 0) or `error` (fail); overrides the file's
+        /// `[simulation] on_discard` (default stop).
+        #[arg(long, value_parser = parse_on_discard, requires = "system")]
+        on_discard: Option<fmi2_cosim::OnDiscard>,
     },
     /// Run the paper's experiments end to end through the master and the FMUs, for the built-in
     /// arm or your own of 2 to 8 joints: friction and gravity identification, training, Table 1,
@@ -530,16 +537,21 @@ fn initial_vector(name: &str, given: Option<Vec<f64>>, n: usize) -> Result<Vec<f
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Simulate { system: Some(system), output, .. } => {
-            let text = std::fs::read_to_string(&system).with_context(|| format!("reading {}", system.display()))?;
-            let spec = fmi2_cosim::SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
-            let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-            let outcome = fmi2_cosim::run(&spec, base).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
-            write_atomic(&output, &outcome.columns, outcome.rows.iter().cloned())
-                .with_context(|| format!("writing {}", output.display()))?;
-            match outcome.error {
-                None => eprintln!("wrote {} rows to {}", outcome.rows.len(), output.display()),
-                Some(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", outcome.rows.len(), output.display()),
+        Command::Simulate { system: Some(system), output, on_discard, .. } => {
+            use neurarm::system_run::{run_system_file, SystemRunEnd};
+            let run = run_system_file(&system, &output, on_discard).map_err(anyhow::Error::msg)?;
+            for notice in &run.notices {
+                eprintln!("notice: {notice}");
+            }
+            let last = run.last_time.map_or(String::new(), |t| format!(", the last at t = {t} s"));
+            match run.end {
+                SystemRunEnd::Completed | SystemRunEnd::Discarded => eprintln!("wrote {} rows to {}{last}", run.rows, output.display()),
+                SystemRunEnd::Interrupted(t) => {
+                    return Err(
+                        Interrupted(format!("interrupted at t = {t} s; the {} rows so far are in {}", run.rows, output.display())).into()
+                    )
+                }
+                SystemRunEnd::Failed(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", run.rows, output.display()),
             }
         }
         Command::Paper {
@@ -1062,6 +1074,14 @@ fn train_from_csv(
 }
 
 /// Parses a damping rule for clap.
+fn parse_on_discard(text: &str) -> std::result::Result<fmi2_cosim::OnDiscard, String> {
+    match text {
+        "stop" => Ok(fmi2_cosim::OnDiscard::Stop),
+        "error" => Ok(fmi2_cosim::OnDiscard::Error),
+        _ => Err(format!("'{text}': use stop or error")),
+    }
+}
+
 fn parse_damping(text: &str) -> std::result::Result<Damping, String> {
     match text.trim() {
         "trainlm" => Ok(Damping::Trainlm),
@@ -1140,9 +1160,25 @@ fn parse_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
     InputEncoding::parse(text)
 }
 
+/// A run ended by Ctrl-C: its message, and exit status 130 (128 + SIGINT) as a shell gives.
+#[derive(Debug)]
+struct Interrupted(String);
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<Interrupted>() => {
+            eprintln!("{e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

@@ -220,6 +220,18 @@ pub fn write_text_atomic(path: &Path, text: &str) -> std::io::Result<()> {
     Ok(())
 }
 
+/// A number as CSV text: the shorter of its plain and exponent forms, both the shortest that
+/// read back as the same `f64` (`2.2e-308`, not 300 digits; `0.001`, `1e21`).
+pub fn number(x: f64) -> String {
+    let plain = x.to_string();
+    let exponent = format!("{x:e}");
+    if exponent.len() < plain.len() {
+        exponent
+    } else {
+        plain
+    }
+}
+
 /// Writes a numeric table to `path` atomically: the rows go to a temporary file beside it,
 /// which is renamed over `path` only once complete, so a failure leaves no partial file.
 /// Numbers are written in Rust's shortest round-trip form, so reading gives the same bits.
@@ -239,7 +251,7 @@ pub fn write_atomic(path: &Path, names: &[String], rows: impl Iterator<Item = Ve
                 if i > 0 {
                     line.push(',');
                 }
-                line.push_str(&v.to_string());
+                line.push_str(&number(*v));
             }
             writeln!(out, "{line}")?;
         }
