@@ -272,3 +272,43 @@ fn gauss_seidel_passes_new_values_through_feedthrough_chains_before_the_next_uni
         assert_eq!(row[1], 4.0 * row[0], "at t = {}", row[0]);
     }
 }
+
+/// The standard lets a variable carry `<Annotations>` and a model description carry
+/// `<VendorAnnotations>` and tool-specific attributes; the `fmi` crate's own parser refuses some
+/// of these, so the master must not depend on it to load an FMU.
+#[test]
+fn an_fmu_with_annotations_loads_and_runs() {
+    use std::io::{Read, Write};
+    let dir = tempfile::tempdir().unwrap();
+    let split = fmu(dir.path(), TestModel::Split);
+    let annotated = dir.path().join("Annotated.fmu");
+    let mut source = zip::ZipArchive::new(std::fs::File::open(&split).unwrap()).unwrap();
+    let mut out = zip::ZipWriter::new(std::fs::File::create(&annotated).unwrap());
+    for i in 0..source.len() {
+        let mut entry = source.by_index(i).unwrap();
+        let mut bytes = Vec::new();
+        entry.read_to_end(&mut bytes).unwrap();
+        if entry.name() == "modelDescription.xml" {
+            let xml = String::from_utf8(bytes).unwrap();
+            let xml = xml
+                .replacen(
+                    "<Real start=\"0\"/>",
+                    "<Real start=\"0\"/>\n      <Annotations><Tool name=\"org.example\"><x/></Tool></Annotations>",
+                    1,
+                )
+                .replace("<ModelVariables>", "<VendorAnnotations><Tool name=\"org.example\"/></VendorAnnotations>\n  <ModelVariables>")
+                .replacen("causality=\"input\"", "causality=\"input\" canHandleMultipleSetPerTimeInstant=\"true\"", 1);
+            assert!(xml.contains("<Annotations>") && xml.contains("canHandleMultipleSetPerTimeInstant"), "{xml}");
+            bytes = xml.into_bytes();
+        }
+        out.start_file(entry.name(), zip::write::SimpleFileOptions::default()).unwrap();
+        out.write_all(&bytes).unwrap();
+    }
+    out.finish().unwrap();
+    let mut s = System::new();
+    s.add_fmu("a", &annotated).unwrap();
+    s.set("a", "u1", Value::Real(2.0)).unwrap();
+    let mut sim = s.initialize(0.0, 0.5, Algorithm::GaussSeidel, &names(&["a.y1"])).unwrap();
+    assert_eq!(sim.run_until(1.0).unwrap(), RunEnd::Completed);
+    assert_eq!(column(&sim, "a.y1"), [4.0, 4.0, 4.0]);
+}
