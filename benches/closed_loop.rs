@@ -4,9 +4,10 @@
 //! - `in_process`: the same computation as plain Rust calls, no FMI: arm step and sensors,
 //!   the four friction nets, the task-space law and computed torque, all in preallocated data.
 //!
-//! The FMUs and nets go to `<target>/closed-loop-bench/` (its `system.toml` is the loop), where
-//! `benches/python/loop_ratio.py` has fmpy drive the same FMUs. `scripts/bench-loop` runs both
-//! and prints the ratios and real-time factors.
+//! The FMUs and nets go to `<target>/closed-loop-bench/` (its `system.toml` is the loop, and
+//! `system.ssp` the same loop as SSP), where `benches/python/loop_ratio.py` has fmpy drive the
+//! same FMUs and libcosim run the SSP. `scripts/bench-loop` runs both and prints the ratios and
+//! real-time factors.
 
 #![allow(missing_docs)] // criterion_group! makes an undocumented public function
 
@@ -81,6 +82,7 @@ fn loop_step(c: &mut Criterion) {
     let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &start, &settings);
     spec.simulation.record.clear();
     std::fs::write(dir.join("system.toml"), spec.to_toml().expect("toml")).expect("system written");
+    fmi2_cosim::ssp::write_ssp(&spec, &dir, &dir.join("system.ssp")).expect("SSP written");
 
     let system = System::from_spec(&spec, &dir).expect("system");
     let mut sim = system.initialize(0.0, STEP, spec.simulation.algorithm, &[]).expect("initialised");
