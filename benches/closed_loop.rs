@@ -166,7 +166,10 @@ impl PlainLoop {
         assert!(ok, "control law");
     }
 
-    /// One communication step; the arm's end-effector outputs (x, y, ẋ, ẏ) after it.
+    /// One communication step; the arm's end-effector outputs (x, y, ẋ, ẏ) after it. Kept a
+    /// call, as the master's step is, so a profiler sees both (`valgrind --tool=callgrind
+    /// --toggle-collect='closed_loop::PlainLoop::step'`).
+    #[inline(never)]
     fn step(&mut self) -> [f64; 4] {
         self.arm.step(&mut self.state, &self.tau, STEP).expect("arm step");
         self.time += STEP;
