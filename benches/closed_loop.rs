@@ -4,9 +4,16 @@
 //! - `in_process`: the same computation as plain Rust calls, no FMI: arm step and sensors,
 //!   the four friction nets, the task-space law and computed torque, all in preallocated data.
 //!
-//! The FMUs and nets go to `<target>/closed-loop-bench/` (its `system.toml` is the loop), where
-//! `benches/python/loop_ratio.py` has fmpy drive the same FMUs. `scripts/bench-loop` runs both
-//! and prints the ratios and real-time factors.
+//! After criterion, both loops are also timed in alternating batches (see
+//! [`alternating_batches`]), into `alternating.json`.
+//!
+//! `scripts/bench-loop --instructions` counts instructions per step instead (callgrind), which
+//! a shared machine does not disturb; see [`PROFILE_STEPS`].
+//!
+//! The FMUs and nets go to `<target>/closed-loop-bench/` (its `system.toml` is the loop, and
+//! `system.ssp` the same loop as SSP), where `benches/python/loop_ratio.py` has fmpy drive the
+//! same FMUs and libcosim run the SSP. `scripts/bench-loop` runs both and prints the ratios and
+//! real-time factors.
 
 #![allow(missing_docs)] // criterion_group! makes an undocumented public function
 
@@ -81,10 +88,17 @@ fn loop_step(c: &mut Criterion) {
     let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &start, &settings);
     spec.simulation.record.clear();
     std::fs::write(dir.join("system.toml"), spec.to_toml().expect("toml")).expect("system written");
+    fmi2_cosim::ssp::write_ssp(&spec, &dir, &dir.join("system.ssp")).expect("SSP written");
 
     let system = System::from_spec(&spec, &dir).expect("system");
     let mut sim = system.initialize(0.0, STEP, spec.simulation.algorithm, &[]).expect("initialised");
-    c.bench_function("closed_loop_1ms/master", |b| b.iter(|| sim.step().expect("step")));
+    let profile_steps: Option<u64> = std::env::var(PROFILE_STEPS).ok().map(|s| s.parse().expect("a step count"));
+    if let Some(n) = profile_steps {
+        for _ in 0..n {
+            master_step(&mut sim);
+        }
+    }
+    c.bench_function("closed_loop_1ms/master", |b| b.iter(|| master_step(&mut sim)));
 
     // The same loop without FMI; first checked to compute what the master does.
     let mut plain = PlainLoop::new(nets.iter().map(|w| w.network().expect("net").mlp).collect());
@@ -101,7 +115,61 @@ fn loop_step(c: &mut Criterion) {
             "the plain loop left the master's at step {k}: {row:?} vs ({x}, {y})"
         );
     }
-    c.bench_function("closed_loop_1ms/in_process", |b| b.iter(|| black_box(plain.step())));
+    if let Some(n) = profile_steps {
+        let mut plain = PlainLoop::new(nets.iter().map(|w| w.network().expect("net").mlp).collect());
+        for _ in 0..n {
+            plain_step(&mut plain);
+        }
+    }
+    c.bench_function("closed_loop_1ms/in_process", |b| b.iter(|| plain_step(&mut plain)));
+    if profile_steps.is_none() {
+        let (master, plain) = alternating_batches(&mut sim, &mut plain);
+        let json =
+            format!("{{\"batch_steps\": {BATCH_STEPS}, \"batches\": {BATCHES}, \"master_s\": {master:e}, \"plain_s\": {plain:e}}}\n");
+        std::fs::write(dir.join("alternating.json"), json).expect("alternating.json written");
+    }
+}
+
+/// Steps per batch and batches per loop of [`alternating_batches`].
+const BATCH_STEPS: u32 = 100;
+const BATCHES: u32 = 2000;
+
+/// Seconds per step of the master and the plain loop, measured in alternation (a batch of one,
+/// then a batch of the other), the fastest batch of each kept: on a machine that others load,
+/// criterion's runs one after the other can see different loads, while the fastest of many
+/// alternating batches sees each loop at its least disturbed.
+fn alternating_batches(sim: &mut fmi2_cosim::Simulation, plain: &mut PlainLoop) -> (f64, f64) {
+    let (mut master_best, mut plain_best) = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..BATCHES {
+        let start = std::time::Instant::now();
+        for _ in 0..BATCH_STEPS {
+            master_step(sim);
+        }
+        master_best = master_best.min(start.elapsed().as_secs_f64() / f64::from(BATCH_STEPS));
+        let start = std::time::Instant::now();
+        for _ in 0..BATCH_STEPS {
+            plain_step(plain);
+        }
+        plain_best = plain_best.min(start.elapsed().as_secs_f64() / f64::from(BATCH_STEPS));
+    }
+    (master_best, plain_best)
+}
+
+/// With this environment variable set to N, both loops take N steps from the start before
+/// criterion runs (which `--bench no-such-benchmark` skips): what `scripts/bench-loop
+/// --instructions` counts under callgrind, in [`master_step`] and [`plain_step`].
+const PROFILE_STEPS: &str = "NEURARM_LOOP_PROFILE_STEPS";
+
+/// One step of the timed master (nothing recorded); a call of its own, for the profiler.
+#[inline(never)]
+fn master_step(sim: &mut fmi2_cosim::Simulation) {
+    sim.step().expect("step");
+}
+
+/// One step of the plain loop; a call of its own, for the profiler.
+#[inline(never)]
+fn plain_step(plain: &mut PlainLoop) {
+    black_box(plain.step());
 }
 
 /// The loop as plain Rust calls: what the three FMUs compute, in the master's order.

@@ -83,12 +83,18 @@ fn an_integrator_gain_loop_becomes_an_ssp() {
         r#"<ssd:Connector name="y0" kind="parameter">"#,
         r#"<ssd:Connector name="k" kind="parameter">"#,
         "<ssc:Real/>",
-        // Hierarchical names; the integer given for a Real goes in as a Real.
-        r#"<ssv:Parameter name="int.y0">"#,
+        // On the components, under the FMUs' own names; the integer given for a Real goes in
+        // as a Real. The set is named after the system.
+        r#"<ssv:ParameterSet version="1.0" name="loop">"#,
+        r#"<ssv:Parameter name="y0">"#,
         r#"<ssv:Real value="1.5"/>"#,
-        r#"<ssv:Parameter name="gain.k">"#,
+        r#"<ssv:Parameter name="k">"#,
         r#"<ssv:Real value="-2.0"/>"#,
         r#"<ssd:DefaultExperiment startTime="0.0" stopTime="2.0">"#,
+        // libcosim's step, and ours with the algorithm and what to record.
+        r#"xmlns:osp="http://opensimulationplatform.com/SSP/OSPAnnotations""#,
+        r#"<ssc:Annotation type="com.opensimulationplatform">"#,
+        r#"<osp:FixedStepAlgorithm baseStepSize="0.01"/>"#,
         r#"stepSize="0.01" algorithm="gauss-seidel" recordEvery="1""#,
         r#"<nr:Record variable="int.y"/>"#,
     ] {
@@ -96,9 +102,14 @@ fn an_integrator_gain_loop_becomes_an_ssp() {
     }
     assert_eq!(ssd.matches("<ssd:Connection ").count(), 2, "{ssd}");
     assert_eq!(ssd.matches("<ssd:Component ").count(), 2, "{ssd}");
-    // Elements come in the standard's order: bindings, then elements, then connections.
+    // Elements come in the standard's order: in a component its connectors, then its bindings;
+    // elements, then connections; each unit's parameters in its own component, none at the system.
     let at = |s: &str| ssd.find(s).unwrap();
-    assert!(at("<ssd:ParameterBindings>") < at("<ssd:Elements>") && at("<ssd:Elements>") < at("<ssd:Connections>"));
+    let (int, gain) = (at(r#"<ssd:Component name="int""#), at(r#"<ssd:Component name="gain""#));
+    assert!(int < at(r#"name="y0""#) && at(r#"name="y0""#) < gain && gain < at(r#"<ssv:Parameter name="k""#));
+    assert!(at("</ssd:Connectors>") < at("<ssd:ParameterBindings>"));
+    assert!(at("<ssd:Elements>") < at("<ssd:ParameterBindings>") && at("</ssd:Elements>") < at("<ssd:Connections>"));
+    assert_eq!(ssd.matches("<ssd:ParameterBindings>").count(), 2, "{ssd}");
     assert!(at("</ssd:System>") < at("<ssd:DefaultExperiment"));
     // Nothing but the archive is left in the folder.
     let mut left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();

@@ -1,9 +1,12 @@
 """Prints the closed-loop step cost (arm + NN friction compensator + task-space controller, 1 ms
 communication step): our master and the plain Rust loop (criterion, just run by
-scripts/bench-loop), and fmpy driving the same three FMUs from Python, Gauss–Seidel with one
-fmi2SetReal / fmi2DoStep / fmi2GetReal per unit and step (the least a Python master can do)."""
+scripts/bench-loop), libcosim running the same loop from its SSP file (its own stepping loop in
+C++, one `cosim_execution_step` call for all steps, no observer), and fmpy driving the same three
+FMUs from Python, Gauss–Seidel with one fmi2SetReal / fmi2DoStep / fmi2GetReal per unit and step
+(the least a Python master can do)."""
 import fnmatch
 import json
+import statistics
 import pathlib
 import sys
 import time
@@ -11,9 +14,11 @@ import tomllib
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
+from libcosimpy.CosimExecution import CosimExecution
+from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
 
 criterion, bench = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
-STEPS = 5000
+STEPS = 5000  # fmpy's
 
 
 def median(name):
@@ -61,10 +66,36 @@ def fmpy_seconds_per_step():
     return (time.perf_counter() - start) / STEPS
 
 
+def libcosim_seconds_per_step(batches, batch_steps):
+    """The median and the fastest of `batches` runs of `batch_steps` steps each, after a warm-up;
+    libcosim as the SSP sets it up (fixed-step algorithm, its default worker threads)."""
+    log_output_level(CosimLogLevel.ERROR)
+    execution = CosimExecution.from_ssp_file(str(bench / "system.ssp"))
+    assert execution.step(200), "libcosim failed a step"
+    times = []
+    for _ in range(batches):
+        start = time.perf_counter()
+        assert execution.step(batch_steps), "libcosim failed a step"
+        times.append((time.perf_counter() - start) / batch_steps)
+    return statistics.median(times), min(times)
+
+
 master = median("closed_loop_1ms_master")
 plain = median("closed_loop_1ms_in_process")
+alternating = json.loads((bench / "alternating.json").read_text())
+libcosim, libcosim_best = libcosim_seconds_per_step(batches=alternating["batches"] // 4, batch_steps=alternating["batch_steps"])
 fmpy = fmpy_seconds_per_step()
 print("\nClosed loop (arm + NN friction compensator + task-space controller), one 1 ms step, median:")
 print(f"  plain Rust loop, no FMI         {plain * 1e6:8.2f} µs   real-time factor {1e-3 / plain:7.0f}")
-print(f"  our master, three FMUs          {master * 1e6:8.2f} µs   real-time factor {1e-3 / master:7.0f}   speed {plain / master:5.2f}x the plain loop (target >= 0.8x)")
-print(f"  fmpy driving the same FMUs      {fmpy * 1e6:8.2f} µs   real-time factor {1e-3 / fmpy:7.0f}   {fmpy / master:5.1f}x slower than our master")
+print(f"  our master, three FMUs          {master * 1e6:8.2f} µs   real-time factor {1e-3 / master:7.0f}   "
+      f"{master / plain:5.3f}x the plain loop's time (target <= 1.05x)")
+print(f"  libcosim, the loop's SSP        {libcosim * 1e6:8.2f} µs   real-time factor {1e-3 / libcosim:7.0f}   "
+      f"{libcosim / master:5.1f}x our master's time (target >= 5x)")
+print(f"  fmpy driving the same FMUs      {fmpy * 1e6:8.2f} µs   real-time factor {1e-3 / fmpy:7.0f}   "
+      f"{fmpy / master:5.1f}x our master's time")
+best_master, best_plain = alternating["master_s"], alternating["plain_s"]
+print(f"\nThe fastest batch of {alternating['batch_steps']} steps ({alternating['batches']} batches of master and "
+      f"plain loop in alternation; {alternating['batches'] // 4} of libcosim), per step:")
+print(f"  plain Rust loop, no FMI         {best_plain * 1e6:8.2f} µs")
+print(f"  our master, three FMUs          {best_master * 1e6:8.2f} µs   {best_master / best_plain:5.3f}x the plain loop's time (target <= 1.05x)")
+print(f"  libcosim, the loop's SSP        {libcosim_best * 1e6:8.2f} µs   {libcosim_best / best_master:5.1f}x our master's time (target >= 5x)")

@@ -1,4 +1,5 @@
-"""Shared fixtures: the neurarm binary (built by scripts/test before pytest runs)."""
+"""Shared fixtures: the neurarm binary (built by scripts/test before pytest runs) and one quick
+paper run for the tests of its closed loops."""
 import os
 import pathlib
 import subprocess
@@ -15,3 +16,11 @@ def neurarm() -> pathlib.Path:
     if not binary.exists():
         subprocess.run(["cargo", "build", "--release", "--locked"], cwd=ROOT, check=True)
     return binary
+
+
+@pytest.fixture(scope="session")
+def paper(neurarm, tmp_path_factory) -> pathlib.Path:
+    """`neurarm paper --quick`'s output folder: systems/*.toml, *.ssp, fmu/, data/."""
+    out = tmp_path_factory.mktemp("paper")
+    subprocess.run([neurarm, "paper", "--quick", "-o", out], check=True, capture_output=True)
+    return out

@@ -2,25 +2,38 @@
 //! Association Project): a zip holding `SystemStructure.ssd` and every FMU under `resources/`.
 //!
 //! # What the SSD holds
+//! Written so that engines read it without help: fmpy (`simulate_ssp`), libcosim (the Open
+//! Simulation Platform's engine, `libcosimpy`) and anything that follows SSP 1.0.
 //! - One `ssd:System` named after the archive, whose `ssd:Elements` are one `ssd:Component`
 //!   per unit, in declaration order (`source="resources/<file>.fmu"`,
 //!   `implementation="CoSimulation"`). Two units loaded from the same file share one copy.
 //! - Per component, `ssd:Connectors` in `modelDescription.xml` order, each with its type
 //!   (`ssc:Real`, `ssc:Integer`, `ssc:Boolean`, ...): every Real, Integer and Boolean output
 //!   (kind `output`), every *connected* input (kind `input`) and every parameter the spec sets
-//!   (kind `parameter`). An input that is not connected gets no connector, even when the spec
-//!   sets it: SSP only requires connectors for what connections use, and importers such as
-//!   fmpy expect every input connector to be connected (and would overwrite its value).
+//!   (kind `parameter`; an enumeration has none, as an `ssc:Enumeration` needs a declared
+//!   type and libcosim refuses an untyped connector). An input that is not connected gets no
+//!   connector, even when the spec sets it: SSP only requires connectors for what connections
+//!   use, and importers such as fmpy expect every input connector to be connected (and would
+//!   overwrite its value).
+//! - Per component, the spec's parameters (and values of unconnected inputs) of that unit as
+//!   `ssd:ParameterBindings` with one inline `ssv:ParameterSet` named after the system, under
+//!   the FMU's own variable names (`q0_1`, not `arm.q0_1`). Bindings on the components are
+//!   what every engine applies; libcosim, for one, ignores a system-level binding. An
+//!   enumeration's value is written as `ssv:Integer` (FMI 2 sets it as an integer).
 //! - `ssd:Connections`, one per output → input pair, `*` patterns expanded by
 //!   [`System::connect`].
-//! - The spec's parameters (and values of unconnected inputs) as one system-level
-//!   `ssd:ParameterBinding` with an inline `ssv:ParameterSet`, under hierarchical names
-//!   (`unit.variable`), so the set applies to the whole system as it stands.
 //! - `ssd:DefaultExperiment` with the start and stop time. SSP 1.0 has no place for the
-//!   communication step, the stepping algorithm or the recorded variables, so these go into
-//!   an `ssc:Annotation` of type [`ANNOTATION_TYPE`] there:
-//!   `<nr:Simulation stepSize="…" algorithm="gauss-seidel|jacobi" recordEvery="…">` with one
-//!   `<nr:Record variable="unit.variable"/>` per recorded variable.
+//!   communication step, so it goes into annotations there, one per reader:
+//!   - libcosim's, type [`OSP_ANNOTATION_TYPE`]:
+//!     `<osp:Algorithm><osp:FixedStepAlgorithm baseStepSize="…"/></osp:Algorithm>` (without
+//!     it, and without a step from the caller, libcosim has no master algorithm and crashes);
+//!   - ours, type [`ANNOTATION_TYPE`], with the step, the stepping algorithm and the recorded
+//!     variables: `<nr:Simulation stepSize="…" algorithm="gauss-seidel|jacobi"
+//!     recordEvery="…">` with one `<nr:Record variable="unit.variable"/>` per recorded
+//!     variable.
+//!
+//! What the engines make of it differs in the ordering, not in the system: see the README
+//! ("SSP files in other engines") for each engine's ordering and the measured gaps.
 
 use std::collections::{BTreeSet, HashMap};
 use std::io::{Cursor, Write};
@@ -32,11 +45,16 @@ use quick_xml::Writer;
 use crate::error::MasterError;
 use crate::interface::{BaseType, Causality};
 use crate::spec::{SimulationSpec, SystemSpec, Value};
-use crate::system::System;
+use crate::system::{Setting, System};
 
 const NS_SSD: &str = "http://ssp-standard.org/SSP1/SystemStructureDescription";
 const NS_SSC: &str = "http://ssp-standard.org/SSP1/SystemStructureCommon";
 const NS_SSV: &str = "http://ssp-standard.org/SSP1/SystemStructureParameterValues";
+/// The Open Simulation Platform's annotations (libcosim).
+const NS_OSP: &str = "http://opensimulationplatform.com/SSP/OSPAnnotations";
+/// `type` of the `ssc:Annotation` in `ssd:DefaultExperiment` that libcosim reads its master
+/// algorithm and communication step from.
+pub const OSP_ANNOTATION_TYPE: &str = "com.opensimulationplatform";
 
 /// Namespace of the elements inside the simulation annotation.
 pub const ANNOTATION_NAMESPACE: &str = "urn:fmi2-cosim:ssp:simulation";
@@ -122,6 +140,18 @@ fn xs_double(x: f64) -> String {
     }
 }
 
+/// The `ssv:` element and value text of a parameter of type `base`. An FMI 2 enumeration is
+/// set as an integer (`fmi2SetInteger`), and an ssv:Enumeration would need its item's name.
+fn parameter_value(base: BaseType, value: &Value) -> (&'static str, String) {
+    match (base, value) {
+        (BaseType::Real, Value::Integer(i)) => ("ssv:Real", xs_double(*i as f64)),
+        (_, Value::Real(x)) => ("ssv:Real", xs_double(*x)),
+        (_, Value::Integer(i)) => ("ssv:Integer", i.to_string()),
+        (_, Value::Boolean(b)) => ("ssv:Boolean", b.to_string()),
+        (_, Value::String(s)) => ("ssv:String", s.clone()),
+    }
+}
+
 /// The text of `SystemStructure.ssd`.
 fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], system_name: &str) -> String {
     let ok = "writing XML to memory cannot fail";
@@ -138,40 +168,13 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
             ("xmlns:ssd", NS_SSD),
             ("xmlns:ssc", NS_SSC),
             ("xmlns:ssv", NS_SSV),
+            ("xmlns:osp", NS_OSP),
             ("version", "1.0"),
             ("name", system_name),
             ("generationTool", tool),
         ]),
     );
     start(&mut w, BytesStart::new("ssd:System").with_attributes([("name", system_name)]));
-
-    if !system.settings().is_empty() {
-        start(&mut w, BytesStart::new("ssd:ParameterBindings"));
-        start(&mut w, BytesStart::new("ssd:ParameterBinding"));
-        start(&mut w, BytesStart::new("ssd:ParameterValues"));
-        start(&mut w, BytesStart::new("ssv:ParameterSet").with_attributes([("version", "1.0"), ("name", "parameters")]));
-        start(&mut w, BytesStart::new("ssv:Parameters"));
-        for setting in system.settings() {
-            let unit = &system.units()[setting.unit];
-            let base = unit.interface.get(&setting.variable).map_or(BaseType::Real, |v| v.base);
-            let name = format!("{}.{}", unit.name, setting.variable);
-            start(&mut w, BytesStart::new("ssv:Parameter").with_attributes([("name", name.as_str())]));
-            let text = match &setting.value {
-                Value::Real(x) => xs_double(*x),
-                Value::Integer(i) if base == BaseType::Real => xs_double(*i as f64),
-                Value::Integer(i) => i.to_string(),
-                Value::Boolean(b) => b.to_string(),
-                Value::String(s) => s.clone(),
-            };
-            empty(&mut w, BytesStart::new(format!("ssv:{}", base.name())).with_attributes([("value", text.as_str())]));
-            end(&mut w, "ssv:Parameter");
-        }
-        end(&mut w, "ssv:Parameters");
-        end(&mut w, "ssv:ParameterSet");
-        end(&mut w, "ssd:ParameterValues");
-        end(&mut w, "ssd:ParameterBinding");
-        end(&mut w, "ssd:ParameterBindings");
-    }
 
     start(&mut w, BytesStart::new("ssd:Elements"));
     for (index, (c, source)) in system.units().iter().zip(sources).enumerate() {
@@ -194,7 +197,9 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
                 let kind = match v.causality {
                     Causality::Output if v.base.is_connectable() => "output",
                     Causality::Input if connected(&v.name) => "input",
-                    Causality::Parameter if set.contains(v.name.as_str()) => "parameter",
+                    // An ssc:Enumeration needs a declared enumeration type, and libcosim refuses
+                    // an untyped connector: the binding below sets it without one.
+                    Causality::Parameter if set.contains(v.name.as_str()) && v.base != BaseType::Enumeration => "parameter",
                     _ => return None,
                 };
                 Some((v.name.as_str(), kind, v.base))
@@ -204,13 +209,30 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
             start(&mut w, BytesStart::new("ssd:Connectors"));
             for (name, kind, base) in connectors {
                 start(&mut w, BytesStart::new("ssd:Connector").with_attributes([("name", name), ("kind", kind)]));
-                // An ssc:Enumeration needs a declared enumeration type; it is left untyped.
-                if base != BaseType::Enumeration {
-                    empty(&mut w, BytesStart::new(format!("ssc:{}", base.name())));
-                }
+                empty(&mut w, BytesStart::new(format!("ssc:{}", base.name())));
                 end(&mut w, "ssd:Connector");
             }
             end(&mut w, "ssd:Connectors");
+        }
+        let settings: Vec<&Setting> = system.settings().iter().filter(|s| s.unit == index).collect();
+        if !settings.is_empty() {
+            start(&mut w, BytesStart::new("ssd:ParameterBindings"));
+            start(&mut w, BytesStart::new("ssd:ParameterBinding"));
+            start(&mut w, BytesStart::new("ssd:ParameterValues"));
+            start(&mut w, BytesStart::new("ssv:ParameterSet").with_attributes([("version", "1.0"), ("name", system_name)]));
+            start(&mut w, BytesStart::new("ssv:Parameters"));
+            for setting in settings {
+                let base = c.interface.get(&setting.variable).map_or(BaseType::Real, |v| v.base);
+                let (element, text) = parameter_value(base, &setting.value);
+                start(&mut w, BytesStart::new("ssv:Parameter").with_attributes([("name", setting.variable.as_str())]));
+                empty(&mut w, BytesStart::new(element).with_attributes([("value", text.as_str())]));
+                end(&mut w, "ssv:Parameter");
+            }
+            end(&mut w, "ssv:Parameters");
+            end(&mut w, "ssv:ParameterSet");
+            end(&mut w, "ssd:ParameterValues");
+            end(&mut w, "ssd:ParameterBinding");
+            end(&mut w, "ssd:ParameterBindings");
         }
         end(&mut w, "ssd:Component");
     }
@@ -237,6 +259,12 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
     let (t0, t1, h, every) = (xs_double(s.start), xs_double(s.stop), xs_double(s.step), s.record_every.max(1).to_string());
     start(&mut w, BytesStart::new("ssd:DefaultExperiment").with_attributes([("startTime", t0.as_str()), ("stopTime", t1.as_str())]));
     start(&mut w, BytesStart::new("ssd:Annotations"));
+    // libcosim's step: it matches the literal prefix `osp:`, not the namespace.
+    start(&mut w, BytesStart::new("ssc:Annotation").with_attributes([("type", OSP_ANNOTATION_TYPE)]));
+    start(&mut w, BytesStart::new("osp:Algorithm"));
+    empty(&mut w, BytesStart::new("osp:FixedStepAlgorithm").with_attributes([("baseStepSize", h.as_str())]));
+    end(&mut w, "osp:Algorithm");
+    end(&mut w, "ssc:Annotation");
     start(&mut w, BytesStart::new("ssc:Annotation").with_attributes([("type", ANNOTATION_TYPE)]));
     let algorithm = s.algorithm.name();
     let simulation = BytesStart::new("nr:Simulation").with_attributes([
@@ -303,6 +331,17 @@ mod tests {
         }
         assert_eq!(xs_double(f64::INFINITY), "INF");
         assert_eq!(xs_double(f64::NEG_INFINITY), "-INF");
+    }
+
+    #[test]
+    fn parameter_values_take_the_variables_type() {
+        assert_eq!(parameter_value(BaseType::Real, &Value::Integer(-2)), ("ssv:Real", "-2.0".into()));
+        assert_eq!(parameter_value(BaseType::Real, &Value::Real(0.5)), ("ssv:Real", "0.5".into()));
+        assert_eq!(parameter_value(BaseType::Integer, &Value::Integer(7)), ("ssv:Integer", "7".into()));
+        // FMI 2 sets an enumeration as an integer; libcosim reads no ssv:Enumeration.
+        assert_eq!(parameter_value(BaseType::Enumeration, &Value::Integer(3)), ("ssv:Integer", "3".into()));
+        assert_eq!(parameter_value(BaseType::Boolean, &Value::Boolean(false)), ("ssv:Boolean", "false".into()));
+        assert_eq!(parameter_value(BaseType::String, &Value::String("a".into())), ("ssv:String", "a".into()));
     }
 
     #[test]

@@ -57,7 +57,11 @@ fn a_system_is_checked_and_written_before_anything_is_loaded() {
     let mut ssd = String::new();
     ssp.by_name("SystemStructure.ssd").unwrap().read_to_string(&mut ssd).unwrap();
     assert!(ssd.contains(r#"<ssd:Connection startElement="a" startConnector="x" endElement="b" endConnector="u"/>"#), "{ssd}");
-    assert!(ssd.contains(r#"<ssv:Parameter name="a.mu">"#) && ssd.contains(r#"<ssv:Real value="0.5"/>"#), "{ssd}");
+    // The setting is bound on its component, under the FMU's own name.
+    let a = ssd.find(r#"<ssd:Component name="a""#).unwrap();
+    let mu = ssd.find(r#"<ssv:Parameter name="mu">"#).expect("mu bound");
+    assert!(a < mu && mu < ssd.find(r#"<ssd:Component name="b""#).unwrap(), "{ssd}");
+    assert!(ssd.contains(r#"<ssv:Real value="0.5"/>"#), "{ssd}");
     let mut names: Vec<&str> = ssp.file_names().collect();
     names.sort_unstable();
     assert_eq!(names, ["SystemStructure.ssd", "resources/Hollow.fmu", "resources/VanDerPol.fmu"]);
