@@ -8,8 +8,8 @@
 //!   per unit, in declaration order (`source="resources/<file>.fmu"`,
 //!   `implementation="CoSimulation"`). Two units loaded from the same file share one copy.
 //! - Per component, `ssd:Connectors` in `modelDescription.xml` order, each with its type
-//!   (`ssc:Real`, `ssc:Integer`, `ssc:Boolean`, ...): every Real, Integer and Boolean output
-//!   (kind `output`), every *connected* input (kind `input`) and every parameter the spec sets
+//!   (`ssc:Real`, `ssc:Integer`, `ssc:Boolean`, `ssc:String`, `ssc:Enumeration name="…"` with
+//!   the type listed in `ssd:Enumerations`): every output (kind `output`), every *connected* input (kind `input`) and every parameter the spec sets
 //!   (kind `parameter`; an enumeration has none, as an `ssc:Enumeration` needs a declared
 //!   type and libcosim refuses an untyped connector). An input that is not connected gets no
 //!   connector, even when the spec sets it: SSP only requires connectors for what connections
@@ -43,9 +43,9 @@ use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 
 use crate::error::MasterError;
-use crate::interface::{BaseType, Causality};
+use crate::interface::{BaseType, Causality, EnumerationInfo};
 use crate::spec::{SimulationSpec, SystemSpec, Value};
-use crate::system::{Setting, System};
+use crate::system::{check_value, Setting, System};
 
 const NS_SSD: &str = "http://ssp-standard.org/SSP1/SystemStructureDescription";
 const NS_SSC: &str = "http://ssp-standard.org/SSP1/SystemStructureCommon";
@@ -176,6 +176,7 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
     );
     start(&mut w, BytesStart::new("ssd:System").with_attributes([("name", system_name)]));
 
+    let mut enumerations: Vec<&EnumerationInfo> = Vec::new();
     start(&mut w, BytesStart::new("ssd:Elements"));
     for (index, (c, source)) in system.units().iter().zip(sources).enumerate() {
         start(
@@ -209,7 +210,16 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
             start(&mut w, BytesStart::new("ssd:Connectors"));
             for (name, kind, base) in connectors {
                 start(&mut w, BytesStart::new("ssd:Connector").with_attributes([("name", name), ("kind", kind)]));
-                empty(&mut w, BytesStart::new(format!("ssc:{}", base.name())));
+                let mut t = BytesStart::new(format!("ssc:{}", base.name()));
+                // An enumeration connector names its type, listed in ssd:Enumerations.
+                if let Some(e) = c.interface.get(name).and_then(|v| c.interface.enumeration_of(v)).filter(|_| base == BaseType::Enumeration)
+                {
+                    t.push_attribute(("name", e.name.as_str()));
+                    if !enumerations.iter().any(|x: &&EnumerationInfo| x.name == e.name) {
+                        enumerations.push(e);
+                    }
+                }
+                empty(&mut w, t);
                 end(&mut w, "ssd:Connector");
             }
             end(&mut w, "ssd:Connectors");
@@ -222,8 +232,11 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
             start(&mut w, BytesStart::new("ssv:ParameterSet").with_attributes([("version", "1.0"), ("name", system_name)]));
             start(&mut w, BytesStart::new("ssv:Parameters"));
             for setting in settings {
-                let base = c.interface.get(&setting.variable).map_or(BaseType::Real, |v| v.base);
-                let (element, text) = parameter_value(base, &setting.value);
+                let info = c.interface.get(&setting.variable);
+                let base = info.map_or(BaseType::Real, |v| v.base);
+                // As the master sets it: an enumeration item given by name is its value.
+                let value = info.and_then(|v| check_value(&c.interface, v, &setting.value).ok()).unwrap_or_else(|| setting.value.clone());
+                let (element, text) = parameter_value(base, &value);
                 start(&mut w, BytesStart::new("ssv:Parameter").with_attributes([("name", setting.variable.as_str())]));
                 empty(&mut w, BytesStart::new(element).with_attributes([("value", text.as_str())]));
                 end(&mut w, "ssv:Parameter");
@@ -254,6 +267,19 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
         end(&mut w, "ssd:Connections");
     }
     end(&mut w, "ssd:System");
+
+    if !enumerations.is_empty() {
+        start(&mut w, BytesStart::new("ssd:Enumerations"));
+        for e in &enumerations {
+            start(&mut w, BytesStart::new("ssc:Enumeration").with_attributes([("name", e.name.as_str())]));
+            for (name, value) in &e.items {
+                let value = value.to_string();
+                empty(&mut w, BytesStart::new("ssc:Item").with_attributes([("name", name.as_str()), ("value", value.as_str())]));
+            }
+            end(&mut w, "ssc:Enumeration");
+        }
+        end(&mut w, "ssd:Enumerations");
+    }
 
     let s = simulation;
     let (t0, t1, h, every) = (xs_double(s.start), xs_double(s.stop), xs_double(s.step), s.record_every.max(1).to_string());

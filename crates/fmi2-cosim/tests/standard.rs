@@ -312,3 +312,39 @@ fn an_fmu_with_annotations_loads_and_runs() {
     assert_eq!(sim.run_until(1.0).unwrap(), RunEnd::Completed);
     assert_eq!(column(&sim, "a.y1"), [4.0, 4.0, 4.0]);
 }
+
+/// Enumerations in SSP: connectors name their type, listed once in ssd:Enumerations; an item
+/// set by name is bound as the integer the master sets.
+#[test]
+fn enumerations_are_written_to_ssp_with_their_types() {
+    use std::io::Read;
+    let dir = tempfile::tempdir().unwrap();
+    let modes = fmu(dir.path(), TestModel::Modes);
+    let mut s = System::new();
+    s.add_fmu("m1", &modes).unwrap().add_fmu("m2", &modes).unwrap();
+    s.set("m1", "shape", Value::String("square".into())).unwrap();
+    s.connect("m1.active", "m2.follow").unwrap();
+    let simulation = SimulationSpec {
+        start: 0.0,
+        stop: 1.0,
+        step: 0.1,
+        algorithm: Algorithm::GaussSeidel,
+        record: Vec::new(),
+        record_every: 1,
+        on_discard: OnDiscard::Stop,
+    };
+    let out = dir.path().join("modes.ssp");
+    fmi2_cosim::ssp::write_system(&s, &simulation, &out).unwrap();
+    let mut ssd = String::new();
+    zip::ZipArchive::new(std::fs::File::open(&out).unwrap())
+        .unwrap()
+        .by_name("SystemStructure.ssd")
+        .unwrap()
+        .read_to_string(&mut ssd)
+        .unwrap();
+    assert_eq!(ssd.matches(r#"<ssc:Enumeration name="Shape"/>"#).count(), 3, "m1.active, m2.active, m2.follow: {ssd}");
+    assert_eq!(ssd.matches(r#"<ssc:Enumeration name="Shape">"#).count(), 1, "{ssd}");
+    assert!(ssd.contains(r#"<ssc:Item name="square" value="2"/>"#), "{ssd}");
+    let binding = &ssd[ssd.find(r#"<ssv:Parameter name="shape">"#).expect("bound")..];
+    assert!(binding.starts_with("<ssv:Parameter name=\"shape\">\n") && binding.contains(r#"<ssv:Integer value="2"/>"#), "{binding}");
+}
