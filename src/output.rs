@@ -64,7 +64,7 @@ impl Destination {
             return Ok(Destination::Stream { path: path.to_path_buf(), append: true });
         }
         match std::fs::metadata(path) {
-            Ok(m) if m.is_dir() => Err(io::Error::new(io::ErrorKind::IsADirectory, "is a folder, not a file")),
+            Ok(m) if m.is_dir() => Err(io::Error::other("is a folder, not a file")),
             Ok(m) if !m.is_file() => Ok(Destination::Stream { path: path.to_path_buf(), append: false }),
             Ok(_) => Ok(Destination::File { path: path.to_path_buf(), target: follow_links(path)? }),
             Err(e) if e.kind() == io::ErrorKind::NotFound => {
@@ -221,7 +221,7 @@ mod tests {
         assert_eq!(Destination::of(Path::new("-")).unwrap(), Destination::Stdout);
         assert!(matches!(Destination::of(Path::new("/dev/null")).unwrap(), Destination::Stream { append: false, .. }));
         assert!(matches!(Destination::of(Path::new("/dev/stdout")).unwrap(), Destination::Stream { append: true, .. }));
-        assert_eq!(Destination::of(d).unwrap_err().kind(), io::ErrorKind::IsADirectory);
+        assert_eq!(Destination::of(d).unwrap_err().to_string(), "is a folder, not a file");
         let new = d.join("new.csv");
         assert_eq!(Destination::of(&new).unwrap(), Destination::File { path: new.clone(), target: new.clone() });
         assert!(Destination::of(&new).unwrap().is_file());
