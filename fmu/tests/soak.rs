@@ -217,9 +217,15 @@ struct Run {
     k: usize,
     /// Persistent state slot, overwritten at each save.
     slot: State,
-    /// The first state saved, serialised, with the step it was saved at and the hash of the
-    /// replay window after it.
-    first: Option<(Vec<u8>, usize, u64)>,
+    /// The step the first state was saved at and the hash of the replay window after it; its
+    /// serialised bytes are in `first_bytes`.
+    first: Option<(usize, u64)>,
+    /// Buffers the run keeps, allocated before the measurement starts, so that the heap in use
+    /// shows the FMU's memory and not the soak's own records.
+    first_bytes: Vec<u8>,
+    serialized: Vec<u8>,
+    input_values: Vec<f64>,
+    output_values: Vec<f64>,
     restores: usize,
     replays: usize,
     rewinds: usize,
@@ -235,21 +241,33 @@ impl Run {
         let instance = model.fmu.instance();
         instance.initialize();
         let initial_outputs = instance.get_real(&model.outputs).unwrap();
+        // The slot is taken now (and overwritten at each save); its size sizes the buffers.
+        let mut slot = State(std::ptr::null_mut());
+        let mut size = 0;
+        if soaked {
+            assert_eq!(unsafe { (instance.api.fmi2GetFMUstate)(instance.c, &mut slot.0) }, OK);
+            assert_eq!(unsafe { (instance.api.fmi2SerializedFMUstateSize)(instance.c, slot.0, &mut size) }, OK);
+        }
+        let (n_in, n_out) = (model.inputs.len(), model.outputs.len());
         Run {
             model,
             model_index,
             soaked,
             instance,
             k: 0,
-            slot: State(std::ptr::null_mut()),
+            slot,
             first: None,
+            first_bytes: Vec::with_capacity(size),
+            serialized: Vec::with_capacity(size),
+            input_values: vec![0.0; n_in],
+            output_values: vec![0.0; n_out],
             restores: 0,
             replays: 0,
             rewinds: 0,
             do_steps: 0,
             busy: 0.0,
             initial_outputs,
-            final_outputs: Vec::new(),
+            final_outputs: Vec::with_capacity(n_out),
         }
     }
 
@@ -276,9 +294,10 @@ impl Run {
 
     /// `steps` steps; the hashes of their outputs, combined.
     fn steps(&mut self, steps: usize) -> u64 {
-        let mut inputs = vec![0.0; self.model.inputs.len()];
-        let mut outputs = vec![0.0; self.model.outputs.len()];
-        (0..steps).fold(0u64, |h, _| h.rotate_left(5) ^ self.step(&mut inputs, &mut outputs))
+        let (mut inputs, mut outputs) = (std::mem::take(&mut self.input_values), std::mem::take(&mut self.output_values));
+        let hash = (0..steps).fold(0u64, |h, _| h.rotate_left(5) ^ self.step(&mut inputs, &mut outputs));
+        (self.input_values, self.output_values) = (inputs, outputs);
+        hash
     }
 
     /// Saves the state (into the reused slot), serialises and deserialises it, steps `replay`
@@ -291,10 +310,10 @@ impl Run {
         let (saved_at, at_save) = (self.k, self.outputs());
         let mut size = 0;
         assert_eq!(unsafe { (api.fmi2SerializedFMUstateSize)(c, self.slot.0, &mut size) }, OK);
-        let mut bytes = vec![0u8; size];
-        assert_eq!(unsafe { (api.fmi2SerializeFMUstate)(c, self.slot.0, bytes.as_mut_ptr(), size) }, OK);
+        self.serialized.resize(size, 0);
+        assert_eq!(unsafe { (api.fmi2SerializeFMUstate)(c, self.slot.0, self.serialized.as_mut_ptr(), size) }, OK);
         let mut copy = std::ptr::null_mut();
-        assert_eq!(unsafe { (api.fmi2DeSerializeFMUstate)(c, bytes.as_ptr(), size, &mut copy) }, OK);
+        assert_eq!(unsafe { (api.fmi2DeSerializeFMUstate)(c, self.serialized.as_ptr(), size, &mut copy) }, OK);
         let first_pass = self.steps(replay);
         let after = self.outputs();
         let from_copy = self.restores % 2 == 0;
@@ -308,7 +327,8 @@ impl Run {
         self.replays += 1;
         assert_eq!(unsafe { (api.fmi2FreeFMUstate)(c, &mut copy) }, OK);
         if self.first.is_none() {
-            self.first = Some((bytes, saved_at, first_pass));
+            self.first = Some((saved_at, first_pass));
+            self.first_bytes.extend_from_slice(&self.serialized);
         }
     }
 
@@ -322,7 +342,8 @@ impl Run {
             self.checkpoint(plan.replay);
         }
         if self.k == plan.steps {
-            self.final_outputs = self.outputs();
+            let outputs = self.outputs();
+            self.final_outputs.extend_from_slice(&outputs);
         }
         self.busy += thread_cpu_seconds() - started;
         self.k == plan.steps
@@ -331,10 +352,11 @@ impl Run {
     /// After the run: restores the first state saved (deserialised into this instance) and
     /// replays the steps after it.
     fn rewind_to_first(&mut self, replay: usize) {
-        let Some((bytes, saved_at, hash)) = self.first.take() else { return };
+        let Some((saved_at, hash)) = self.first.take() else { return };
         let api = self.instance.api.clone();
         let c = self.instance.c;
         let mut state = std::ptr::null_mut();
+        let bytes = &self.first_bytes;
         assert_eq!(unsafe { (api.fmi2DeSerializeFMUstate)(c, bytes.as_ptr(), bytes.len(), &mut state) }, OK);
         assert_eq!(unsafe { (api.fmi2SetFMUstate)(c, state) }, OK);
         self.k = saved_at;
@@ -409,6 +431,45 @@ fn heap_in_use() -> usize {
     m.uordblks + m.hblkhd
 }
 
+/// Memory samples in a buffer allocated once: when it is full, every second sample is dropped
+/// and only every second one kept from then on, so a run of any length keeps an even record
+/// without allocating while it is measured.
+struct Samples {
+    /// (resident KiB, heap bytes).
+    kept: Vec<(u64, usize)>,
+    stride: usize,
+    taken: usize,
+    peak_rss_kib: u64,
+    peak_heap: usize,
+}
+
+impl Samples {
+    const CAPACITY: usize = 4096;
+
+    fn new() -> Self {
+        Samples { kept: Vec::with_capacity(Self::CAPACITY), stride: 1, taken: 0, peak_rss_kib: 0, peak_heap: 0 }
+    }
+
+    fn add(&mut self, rss_kib: u64, heap: usize) {
+        self.peak_rss_kib = self.peak_rss_kib.max(rss_kib);
+        self.peak_heap = self.peak_heap.max(heap);
+        if self.taken % self.stride == 0 {
+            if self.kept.len() == Self::CAPACITY {
+                let mut i = 0;
+                self.kept.retain(|_| {
+                    i += 1;
+                    i % 2 == 1
+                });
+                self.stride *= 2;
+            }
+            if self.taken % self.stride == 0 {
+                self.kept.push((rss_kib, heap));
+            }
+        }
+        self.taken += 1;
+    }
+}
+
 /// What a soak measured.
 struct Figures {
     lines: Vec<String>,
@@ -433,27 +494,27 @@ fn soak(plan: Plan) -> Figures {
         }
     }
     let instances = runs.len();
-    let (rss_start, _) = resident_kib();
-    let heap_start = heap_in_use();
+    let mut shares: Vec<Vec<Run>> = (0..plan.threads).map(|_| Vec::with_capacity(instances)).collect();
+    for (i, run) in runs.into_iter().enumerate() {
+        shares[i % plan.threads].push(run);
+    }
 
-    // Sample the resident memory while the workers step.
+    // Sample the resident memory and the heap while the workers step.
     let stop = Arc::new(AtomicBool::new(false));
-    let samples = Arc::new(Mutex::new(Vec::new()));
+    let samples = Arc::new(Mutex::new(Samples::new()));
     let sampler = {
         let (stop, samples) = (stop.clone(), samples.clone());
         std::thread::spawn(move || {
-            let t0 = Instant::now();
             while !stop.load(Ordering::Relaxed) {
-                samples.lock().unwrap().push((t0.elapsed().as_secs_f64(), resident_kib().0));
+                let heap = heap_in_use();
+                samples.lock().unwrap().add(resident_kib().0, heap);
                 std::thread::sleep(Duration::from_millis(50));
             }
         })
     };
+    let (rss_start, _) = resident_kib();
+    let heap_start = heap_in_use();
     let started = Instant::now();
-    let mut shares: Vec<Vec<Run>> = (0..plan.threads).map(|_| Vec::new()).collect();
-    for (i, run) in runs.into_iter().enumerate() {
-        shares[i % plan.threads].push(run);
-    }
     let workers: Vec<_> = shares
         .into_iter()
         .map(|mut share| {
@@ -545,26 +606,37 @@ fn soak(plan: Plan) -> Figures {
             soaked_rate / plain_rate
         ));
     }
-    let samples = samples.lock().unwrap().clone();
-    let rss_peak = samples.iter().map(|s| s.1).max().unwrap_or(rss_end).max(rss_end);
-    let pick = |f: f64| samples.get(((samples.len().max(1) - 1) as f64 * f).round() as usize).map_or(0, |s| s.1);
+    let samples = samples.lock().unwrap();
+    let at = |f: f64, heap: bool| {
+        let kept = &samples.kept;
+        kept.get(((kept.len().max(1) - 1) as f64 * f).round() as usize).map_or(0, |s| if heap { s.1 / 1024 } else { s.0 as usize })
+    };
     lines.push(format!(
-        "resident memory [KiB]: start {rss_start} (instances ready), end {rss_end}, peak sampled {rss_peak} ({} samples), high-water mark \
+        "resident memory [KiB]: start {rss_start} (instances ready), end {rss_end}, peak sampled {} ({} samples), high-water mark \
          {rss_high_water}; at 10/25/50/75/100 % of the run: {} / {} / {} / {} / {}",
-        samples.len(),
-        pick(0.1),
-        pick(0.25),
-        pick(0.5),
-        pick(0.75),
-        pick(1.0)
+        samples.peak_rss_kib.max(rss_end),
+        samples.taken,
+        at(0.1, false),
+        at(0.25, false),
+        at(0.5, false),
+        at(0.75, false),
+        at(1.0, false)
     ));
     lines.push(format!(
-        "heap in use (malloc, every arena) [KiB]: before the instances {}, start {}, end {}, change {:+}",
+        "heap in use (malloc, every arena) [KiB]: before the instances {}, start {}, end {}, change {:+}, peak sampled {}; at \
+         10/25/50/75/100 % of the run: {} / {} / {} / {} / {}",
         heap_before / 1024,
         heap_start / 1024,
         heap_end / 1024,
-        (heap_end as i64 - heap_start as i64) / 1024
+        (heap_end as i64 - heap_start as i64) / 1024,
+        samples.peak_heap / 1024,
+        at(0.1, true),
+        at(0.25, true),
+        at(0.5, true),
+        at(0.75, true),
+        at(1.0, true)
     ));
+    drop(samples);
     drop(runs);
     let heap_freed = heap_in_use();
     drop(models);
