@@ -31,8 +31,12 @@ pub fn find_binary() -> Result<PathBuf, String> {
 
 /// Writes the FMU for `spec` to `path`, with the files it names taken from `sources`. The
 /// files are checked by building the model from them exactly as the FMU will at
-/// instantiation. Nothing is left at `path` on failure.
+/// instantiation. The FMU is packed in a temporary folder, then written to `path` as
+/// [`crate::output`] says: a file is replaced whole (nothing is left at `path` on failure), a
+/// device or FIFO gets the archive's bytes. `-` is refused: an FMU is a binary archive, not
+/// something for a terminal (`/dev/stdout` streams it to a pipe).
 pub fn export_fmu(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path) -> Result<(), String> {
+    refuse_stdout(path)?;
     let staging = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
     let mut resources = vec![(SPEC_FILE.to_owned(), spec.to_toml().into_bytes())];
     for name in spec.resource_files() {
@@ -48,6 +52,17 @@ pub fn export_fmu(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path) ->
     })?;
     let binary = find_binary()?;
     let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
-    fmi2_export::package::write_fmu(path, model.description(), &binary, &files, spec.equations_html())
-        .map_err(|e| format!("writing {}: {e}", path.display()))
+    let packed = staging.path().join(format!("{}.fmu", spec.identifier));
+    fmi2_export::package::write_fmu(&packed, model.description(), &binary, &files, spec.equations_html())
+        .map_err(|e| format!("packing {}: {e}", path.display()))?;
+    let bytes = std::fs::read(&packed).map_err(|e| format!("reading the packed {}: {e}", path.display()))?;
+    crate::output::write_bytes(path, &bytes).map_err(|e| format!("writing {}: {e}", path.display()))
+}
+
+/// Refuses `-` as the path of an FMU, saying why.
+pub fn refuse_stdout(path: &Path) -> Result<(), String> {
+    if crate::output::is_stdout(path) {
+        return Err("an FMU is a binary archive: give a .fmu file name with -o, not '-' (to pipe it, -o /dev/stdout)".into());
+    }
+    Ok(())
 }

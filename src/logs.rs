@@ -17,14 +17,27 @@ use neurarm_physics::arm::ArmParams;
 use neurarm_physics::nn::{EpochInfo, InputEncoding};
 
 /// Writes joint `joint`'s (1-based) friction pairs: `qd_J [rad/s]`, `tau_friction_J [N.m]`,
-/// `samples`, and the identification's verdicts as JSON beside them (`.json`).
-pub fn write_friction_pairs(path: &Path, joint: usize, found: &FrictionIdentification) -> Result<(), String> {
+/// `samples`, and, when `path` is a file, the identification's verdicts as JSON beside them
+/// (`.json`); returns the JSON's path, or `None` when the pairs went to standard output, a
+/// device or a FIFO (see [`crate::output`]), which have no "beside".
+pub fn write_friction_pairs(path: &Path, joint: usize, found: &FrictionIdentification) -> Result<Option<PathBuf>, String> {
     let names = vec![header_cell(&format!("qd_{joint}"), "rad/s"), header_cell(&format!("tau_friction_{joint}"), "N.m"), "samples".into()];
     let json = serde_json::to_string_pretty(&FrictionFile { joint, identification: found }).map_err(|e| e.to_string())?;
-    write_text_atomic(&report_path(path)?, &json)
-        .map_err(|e| format!("writing {}: {e}", report_path(path).unwrap_or_default().display()))?;
+    let report = write_report_beside(path, &json)?;
     write_atomic(path, &names, found.pairs.iter().map(|p| vec![p.0, p.1, p.2 as f64]))
-        .map_err(|e| format!("writing {}: {e}", path.display()))
+        .map_err(|e| format!("writing {}: {e}", crate::output::describe(path)))?;
+    Ok(report)
+}
+
+/// Writes `json` to the report beside the pairs `path` when `path` is a file; returns its path.
+fn write_report_beside(path: &Path, json: &str) -> Result<Option<PathBuf>, String> {
+    let destination = crate::output::Destination::of(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if !destination.is_file() {
+        return Ok(None);
+    }
+    let report = report_path(path)?;
+    write_text_atomic(&report, json).map_err(|e| format!("writing {}: {e}", report.display()))?;
+    Ok(Some(report))
 }
 
 #[derive(Serialize)]
@@ -101,17 +114,18 @@ pub fn friction_summary(joint: usize, found: &FrictionIdentification) -> String 
 }
 
 /// Writes gravity pairs: `q_i [rad]`, `tau_gravity_i [N.m]` (corrected), `tau_plain_i [N.m]` (the
-/// plain average), and the poses' verdicts as JSON beside them.
-pub fn write_gravity_pairs(path: &Path, found: &GravityIdentification) -> Result<(), String> {
+/// plain average), and, when `path` is a file, the poses' verdicts as JSON beside them; returns
+/// the JSON's path as [`write_friction_pairs`] does.
+pub fn write_gravity_pairs(path: &Path, found: &GravityIdentification) -> Result<Option<PathBuf>, String> {
     let n = found.pairs.first().map_or(0, |p| p.q.len());
     let mut names: Vec<String> = (1..=n).map(|i| header_cell(&format!("q_{i}"), "rad")).collect();
     names.extend((1..=n).map(|i| header_cell(&format!("tau_gravity_{i}"), "N.m")));
     names.extend((1..=n).map(|i| header_cell(&format!("tau_plain_{i}"), "N.m")));
     let json = serde_json::to_string_pretty(found).map_err(|e| e.to_string())?;
-    let report = report_path(path)?;
-    write_text_atomic(&report, &json).map_err(|e| format!("writing {}: {e}", report.display()))?;
+    let report = write_report_beside(path, &json)?;
     write_atomic(path, &names, found.pairs.iter().map(|p| [p.q.clone(), p.torque.clone(), p.torque_uncorrected.clone()].concat()))
-        .map_err(|e| format!("writing {}: {e}", path.display()))
+        .map_err(|e| format!("writing {}: {e}", crate::output::describe(path)))?;
+    Ok(report)
 }
 
 /// What became of the poses, in words.
@@ -209,8 +223,9 @@ pub fn compensator_from_logs(
             return Err(format!("friction of joint {joint}: only {} pairs from {}", found.pairs.len(), job.friction_log.display()));
         }
         let pairs_path = job.work.join(format!("friction_{joint}.csv"));
-        write_friction_pairs(&pairs_path, joint, &found)?;
-        files.extend([pairs_path.clone(), report_path(&pairs_path)?]);
+        let report = write_friction_pairs(&pairs_path, joint, &found)?;
+        files.push(pairs_path.clone());
+        files.extend(report);
         say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
         let net = train_friction_net(joint - 1, &found.pairs, job.seed)?;
         let net_path = job.work.join(format!("friction_{joint}.json"));
@@ -228,8 +243,9 @@ pub fn compensator_from_logs(
         let found = identify_gravity_log(&log, &job.gravity, &correction).map_err(|e| format!("gravity: {e}"))?;
         say(gravity_summary(&found).lines().last().unwrap_or(""));
         let pairs_path = job.work.join("gravity.csv");
-        write_gravity_pairs(&pairs_path, &found)?;
-        files.extend([pairs_path.clone(), report_path(&pairs_path)?]);
+        let report = write_gravity_pairs(&pairs_path, &found)?;
+        files.push(pairs_path.clone());
+        files.extend(report);
         let pairs: Vec<(Vec<f64>, Vec<f64>)> = found.pairs.iter().map(|p| (p.q.clone(), p.torque.clone())).collect();
         if pairs.len() < 10 {
             return Err(format!("gravity: only {} pairs from {}; the net needs at least 10 poses", pairs.len(), log.path.display()));

@@ -8,6 +8,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::DMatrix;
 use neurarm::export::export_fmu;
+use neurarm::output::{describe, Destination};
 use neurarm::simulate::{simulate, TorqueInput};
 use neurarm::table::{write_atomic, write_text_atomic, NumericTable};
 use neurarm_models::{
@@ -21,7 +22,15 @@ use neurarm_physics::nn::{train, InputEncoding, NetKind, Signal, TrainSettings, 
 use std::io::IsTerminal;
 
 #[derive(Parser)]
-#[command(name = "neurarm", version, about = "Learn robot-joint dynamics with neural networks and ship them as FMI 2.0 components")]
+#[command(
+    name = "neurarm",
+    version,
+    about = "Learn robot-joint dynamics with neural networks and ship them as FMI 2.0 components",
+    after_help = "Outputs (-o): a file is written whole to a temporary file beside it and renamed over it, so it \
+                  appears complete or not at all; through a symbolic link the link's target is replaced and the link stays. \
+                  `-` is standard output (text and CSV; refused for an .fmu). A device or FIFO (/dev/null, /dev/stdout, a \
+                  named pipe) is written directly. Side files (a plan's .txt, identify's .json) are written only beside a file."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -64,9 +73,9 @@ enum Command {
         base_angle: Option<f64>,
         #[command(flatten)]
         arm: ArmSource,
-        /// Output trajectory CSV; written only if the whole simulation succeeds. For a system
-        /// file, the recording, written also when a unit fails, discards a step or Ctrl-C ends
-        /// the run (then with the rows so far).
+        /// Output trajectory CSV (`-`: standard output); written only if the whole simulation
+        /// succeeds. For a system file, the recording, written also when a unit fails, discards
+        /// a step or Ctrl-C ends the run (then with the rows so far).
         #[arg(long, short = 'o')]
         output: PathBuf,
         /// For a system file: what a unit that discards a step (fmi2Discard) does, `stop` (end
@@ -89,7 +98,8 @@ enum Command {
         /// same joint count. Without it, the real arm is emulated from the arm (labelled so).
         #[arg(long)]
         real: Option<PathBuf>,
-        /// Output folder (absent, empty, or an earlier run's, which is replaced).
+        /// Output folder (absent, empty, or an earlier run's, which is replaced; through a
+        /// symbolic link, the folder it points to is replaced and the link stays).
         #[arg(long, short = 'o', default_value = "out")]
         output: PathBuf,
         /// A reduced run (3⁴ gravity grid, coarse friction levels, one period of tracking).
@@ -137,7 +147,11 @@ enum Command {
         gravity_plain_average: bool,
     },
     /// Print the default arm configuration as TOML, a starting point for your own arm.
-    DefaultConfig,
+    DefaultConfig {
+        /// Where to write it (default `-`: standard output).
+        #[arg(long, short = 'o', default_value = "-")]
+        output: PathBuf,
+    },
     /// Write the paper's experiments as plans a robot's own controller can play (CSV with units in
     /// the header, and a .txt beside it that says how to run them).
     #[command(subcommand)]
@@ -171,7 +185,7 @@ enum Command {
         /// Speed of the gravity passes [rad/s].
         #[arg(long, default_value_t = 0.25)]
         pass_speed: f64,
-        /// Output .fmu file.
+        /// Output .fmu file (`-` is refused: pipe it with /dev/stdout).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -230,7 +244,7 @@ enum Command {
         /// gain-ratio rule, which needs fewer epochs on the gravity benches).
         #[arg(long, value_parser = parse_damping, default_value = "trainlm")]
         damping: Damping,
-        /// Output weights file (JSON).
+        /// Output weights file (JSON; `-`: standard output).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -242,7 +256,7 @@ enum Command {
         /// Input CSV with the net's input columns.
         #[arg(long, short = 'd')]
         data: PathBuf,
-        /// Output CSV.
+        /// Output CSV (`-`: standard output).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -264,7 +278,8 @@ enum PlanCommand {
         /// Spacing of the levels' speeds [rad/s].
         #[arg(long, default_value_t = 0.1)]
         spacing: f64,
-        /// Output plan (.csv; the instructions go to a .txt beside it).
+        /// Output plan (.csv; the instructions go to a .txt beside it, or to the terminal when the
+        /// plan goes to `-` (standard output), a device or a FIFO).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -288,7 +303,8 @@ enum PlanCommand {
         /// Seed of a sampled design.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Output plan (.csv; the instructions go to a .txt beside it).
+        /// Output plan (.csv; the instructions go to a .txt beside it, or to the terminal when the
+        /// plan goes to `-` (standard output), a device or a FIFO).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -353,7 +369,7 @@ enum IdentifyCommand {
         /// The joint's inertia with the others held [kg·m²]: takes what is left of the approach out.
         #[arg(long)]
         inertia: Option<f64>,
-        /// Output pairs (.csv).
+        /// Output pairs (.csv; `-`: standard output); the verdicts go to a .json beside a file.
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -378,7 +394,7 @@ enum IdentifyCommand {
         /// Measuring window at the middle of each pass [s].
         #[arg(long, default_value_t = 0.5)]
         window: f64,
-        /// Output pairs (.csv).
+        /// Output pairs (.csv; `-`: standard output); the verdicts go to a .json beside a file.
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -395,7 +411,7 @@ enum Export {
         /// Model identifier (default: the output file's name, e.g. MyArm for MyArm.fmu).
         #[arg(long)]
         name: Option<String>,
-        /// Output .fmu file.
+        /// Output .fmu file (`-` is refused: pipe it with /dev/stdout).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -424,7 +440,7 @@ enum Export {
         /// Model identifier (default: the output file's name).
         #[arg(long)]
         name: Option<String>,
-        /// Output .fmu file.
+        /// Output .fmu file (`-` is refused: pipe it with /dev/stdout).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -467,7 +483,7 @@ enum Controller {
         /// Model identifier (default: the output file's name).
         #[arg(long)]
         name: Option<String>,
-        /// Output .fmu file.
+        /// Output .fmu file (`-` is refused: pipe it with /dev/stdout).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -495,7 +511,7 @@ enum Controller {
         /// Model identifier (default: the output file's name).
         #[arg(long)]
         name: Option<String>,
-        /// Output .fmu file.
+        /// Output .fmu file (`-` is refused: pipe it with /dev/stdout).
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
@@ -545,13 +561,13 @@ fn run(cli: Cli) -> Result<()> {
             }
             let last = run.last_time.map_or(String::new(), |t| format!(", the last at t = {t} s"));
             match run.end {
-                SystemRunEnd::Completed | SystemRunEnd::Discarded => eprintln!("wrote {} rows to {}{last}", run.rows, output.display()),
+                SystemRunEnd::Completed | SystemRunEnd::Discarded => eprintln!("wrote {} rows to {}{last}", run.rows, describe(&output)),
                 SystemRunEnd::Interrupted(t) => {
                     return Err(
-                        Interrupted(format!("interrupted at t = {t} s; the {} rows so far are in {}", run.rows, output.display())).into()
+                        Interrupted(format!("interrupted at t = {t} s; the {} rows so far are in {}", run.rows, describe(&output))).into()
                     )
                 }
-                SystemRunEnd::Failed(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", run.rows, output.display()),
+                SystemRunEnd::Failed(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", run.rows, describe(&output)),
             }
         }
         Command::Paper {
@@ -646,8 +662,8 @@ fn run(cli: Cli) -> Result<()> {
             }
             let rows = trajectory.rows.len();
             write_atomic(&output, &trajectory.names, trajectory.rows.into_iter())
-                .with_context(|| format!("writing {}", output.display()))?;
-            eprintln!("wrote {rows} rows to {}", output.display());
+                .with_context(|| format!("writing {}", describe(&output)))?;
+            eprintln!("wrote {rows} rows to {}", describe(&output));
         }
         Command::Simulate { torque, arm, output, base_angle, .. } => {
             let torque = torque.expect("clap requires --torque without a system file");
@@ -658,10 +674,15 @@ fn run(cli: Cli) -> Result<()> {
             let input = TorqueInput::read_csv(&torque, config.arm.dof())?;
             let trajectory = simulate(&config, &initial, &input)?;
             write_atomic(&output, &trajectory.names, trajectory.rows.into_iter())
-                .with_context(|| format!("writing {}", output.display()))?;
-            eprintln!("wrote {} rows to {}", input.time.len(), output.display());
+                .with_context(|| format!("writing {}", describe(&output)))?;
+            eprintln!("wrote {} rows to {}", input.time.len(), describe(&output));
         }
-        Command::DefaultConfig => print!("{}", ArmConfig::default().to_toml_string()),
+        Command::DefaultConfig { output } => {
+            write_text_atomic(&output, &ArmConfig::default().to_toml_string()).with_context(|| format!("writing {}", describe(&output)))?;
+            if !neurarm::output::is_stdout(&output) {
+                eprintln!("wrote {}", output.display());
+            }
+        }
         Command::Plan(PlanCommand::Friction { config, joints, max_speed, spacing, output }) => {
             let source = config.as_ref().map_or("the built-in arm".to_owned(), |c| c.display().to_string());
             let arm = load_config(config)?.arm;
@@ -672,8 +693,10 @@ fn run(cli: Cli) -> Result<()> {
             settings.max_speed_rad_s = max_speed;
             settings.spacing_rad_s = spacing;
             let plan = neurarm::plan::friction_plan(&arm, &settings).map_err(anyhow::Error::msg)?;
-            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &plan.instructions(&source)).map_err(anyhow::Error::msg)?;
-            eprintln!("wrote {} ({} segments, {:.0} s) and {}", output.display(), plan.segments.len(), plan.end_s, notes.display());
+            let instructions = plan.instructions(&source);
+            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &instructions).map_err(anyhow::Error::msg)?;
+            let what = format!("{} segments, {:.0} s", plan.segments.len(), plan.end_s);
+            say_plan_written(&output, &what, notes.as_deref(), &instructions);
         }
         Command::Plan(PlanCommand::Gravity { config, poses, grid, speed, pass_time, seed, output }) => {
             use neurarm::experiments::GravityDesign;
@@ -686,9 +709,9 @@ fn run(cli: Cli) -> Result<()> {
             };
             let settings = neurarm::plan::GravityPlanSettings { design, speed_rad_s: speed, pass_s: pass_time, seed };
             let plan = neurarm::plan::gravity_plan(n, &settings).map_err(anyhow::Error::msg)?;
-            let notes =
-                neurarm::plan::write_plan(&output, &plan.to_csv(), &plan.instructions(&source, &settings)).map_err(anyhow::Error::msg)?;
-            eprintln!("wrote {} ({} poses, {:.0} s) and {}", output.display(), plan.poses, plan.end_s, notes.display());
+            let instructions = plan.instructions(&source, &settings);
+            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &instructions).map_err(anyhow::Error::msg)?;
+            say_plan_written(&output, &format!("{} poses, {:.0} s", plan.poses, plan.end_s), notes.as_deref(), &instructions);
         }
         Command::Identify(IdentifyCommand::Friction { log, joint, columns, bin_width, window, drift, spread, inertia, output }) => {
             let columns = columns.columns();
@@ -706,8 +729,8 @@ fn run(cli: Cli) -> Result<()> {
             let robot_log = neurarm::identify::RobotLog::read_joint(&log, &columns, joint)?;
             let found = neurarm::identify::identify_friction_log(&robot_log, joint, &options).map_err(anyhow::Error::msg)?;
             eprint!("{}", neurarm::logs::friction_summary(joint, &found));
-            neurarm::logs::write_friction_pairs(&output, joint, &found).map_err(anyhow::Error::msg)?;
-            eprintln!("wrote {} pairs to {}", found.pairs.len(), output.display());
+            let report = neurarm::logs::write_friction_pairs(&output, joint, &found).map_err(anyhow::Error::msg)?;
+            say_pairs_written(&output, found.pairs.len(), report.as_deref());
         }
         Command::Identify(IdentifyCommand::Gravity { log, columns, friction, config, speed, window, output }) => {
             let columns = columns.columns();
@@ -735,16 +758,25 @@ fn run(cli: Cli) -> Result<()> {
             let correction = neurarm::identify::GravityCorrection { friction: &curves, model: model.as_ref() };
             let found = neurarm::identify::identify_gravity_log(&robot_log, &options, &correction).map_err(anyhow::Error::msg)?;
             eprint!("{}", neurarm::logs::gravity_summary(&found));
-            neurarm::logs::write_gravity_pairs(&output, &found).map_err(anyhow::Error::msg)?;
-            eprintln!("wrote {} pairs to {}", found.pairs.len(), output.display());
+            let report = neurarm::logs::write_gravity_pairs(&output, &found).map_err(anyhow::Error::msg)?;
+            say_pairs_written(&output, found.pairs.len(), report.as_deref());
         }
         Command::Compensator { friction_log, gravity_log, config, work, seed, name, columns, pass_speed, output } => {
             let model = match config {
                 Some(c) => Some(ArmConfig::from_toml_file(&c)?.arm),
                 None => None,
             };
+            neurarm::export::refuse_stdout(&output).map_err(anyhow::Error::msg)?;
             let identifier = identifier_for(name, &output, "NnCompensator");
-            let work = work.unwrap_or_else(|| output.with_file_name(format!("{identifier}-files")));
+            let work = match work {
+                Some(work) => work,
+                None if Destination::of(&output).with_context(|| output.display().to_string())?.is_file() => {
+                    output.with_file_name(format!("{identifier}-files"))
+                }
+                None => {
+                    bail!("{} is not a file, so there is no folder beside it: give --work for the intermediate files", output.display())
+                }
+            };
             let job = neurarm::logs::CompensatorJob {
                 friction_log,
                 gravity_log,
@@ -800,13 +832,13 @@ fn run(cli: Cli) -> Result<()> {
                 NetKind::Unspecified => weights,
             };
             weights.network().map_err(|e| anyhow::anyhow!("--kind {}: {e}", kind.name()))?;
-            write_text_atomic(&output, &weights.to_json()).with_context(|| format!("writing {}", output.display()))?;
+            write_text_atomic(&output, &weights.to_json()).with_context(|| format!("writing {}", describe(&output)))?;
             let r = &weights.report;
             let rms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.3e}", v.sqrt()));
             let unit = weights.outputs[0].unit.as_str();
             eprintln!(
                 "wrote {} ({}): {} epochs (best {}), stopped by {}; RMS error train {}, validation {}, test {} [{}] on {}/{}/{} samples",
-                output.display(),
+                describe(&output),
                 weights.describe(),
                 r.epochs,
                 r.best_epoch,
@@ -834,8 +866,8 @@ fn run(cli: Cli) -> Result<()> {
                 row.extend(mlp.evaluate(&x));
                 row
             });
-            write_atomic(&output, &header, rows).with_context(|| format!("writing {}", output.display()))?;
-            eprintln!("wrote {} rows to {}", table.rows(), output.display());
+            write_atomic(&output, &header, rows).with_context(|| format!("writing {}", describe(&output)))?;
+            eprintln!("wrote {} rows to {}", table.rows(), describe(&output));
         }
         Command::Export(Export::Compensator { friction, gravity, ideal: true, config, name, output }) => {
             if friction.as_ref().is_some_and(|f| !f.is_empty()) || gravity.as_ref().is_some_and(|g| g.is_some()) {
@@ -930,6 +962,22 @@ fn run(cli: Cli) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Says where a plan went; its instructions go to the terminal when there is no file beside it.
+fn say_plan_written(output: &std::path::Path, what: &str, notes: Option<&std::path::Path>, instructions: &str) {
+    match notes {
+        Some(notes) => eprintln!("wrote {} ({what}) and {}", output.display(), notes.display()),
+        None => eprintln!("wrote the plan ({what}) to {}; its instructions (no .txt beside it):\n\n{instructions}", describe(output)),
+    }
+}
+
+/// Says where identified pairs went, and where their verdicts went.
+fn say_pairs_written(output: &std::path::Path, pairs: usize, report: Option<&std::path::Path>) {
+    match report {
+        Some(report) => eprintln!("wrote {pairs} pairs to {} and the verdicts to {}", output.display(), report.display()),
+        None => eprintln!("wrote {pairs} pairs to {} (no .json of verdicts beside it: the summary above has them)", describe(output)),
+    }
 }
 
 /// Two positive gains from an option's values.

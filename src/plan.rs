@@ -21,7 +21,7 @@ use std::path::Path;
 
 use crate::experiments::gravity::design_poses;
 use crate::experiments::{held_inertia, GravityDesign};
-use crate::table::{header_cell, write_text_atomic};
+use crate::table::{header_cell, number, write_text_atomic};
 use neurarm_physics::arm::ArmParams;
 
 /// Settings of a friction plan.
@@ -180,8 +180,8 @@ impl FrictionPlan {
         let mut out = header.join(",") + "\n";
         let end = FrictionSegment { time_s: self.end_s, joint: 0, torque_nm: 0.0, expected_speed_rad_s: 0.0 };
         for (k, s) in self.segments.iter().chain(std::iter::once(&end)).enumerate() {
-            let mut row = vec![format!("{}", s.time_s), (k + 1).to_string(), s.joint.to_string()];
-            row.extend((1..=n).map(|i| if i == s.joint { format!("{}", s.torque_nm) } else { "0".into() }));
+            let mut row = vec![number(s.time_s), (k + 1).to_string(), s.joint.to_string()];
+            row.extend((1..=n).map(|i| if i == s.joint { number(s.torque_nm) } else { "0".into() }));
             row.extend((1..=n).map(|i| if i == s.joint { "0" } else { "1" }.to_owned()));
             out += &(row.join(",") + "\n");
         }
@@ -310,9 +310,9 @@ impl GravityPlan {
         header.extend((1..=n).map(|i| header_cell(&format!("qd_{i}"), "rad/s")));
         let mut out = header.join(",") + "\n";
         for s in &self.segments {
-            let mut row = vec![format!("{}", s.time_s), s.pose.to_string(), s.pass.to_string()];
-            row.extend(s.q.iter().map(|v| format!("{v}")));
-            row.extend(s.qd.iter().map(|v| format!("{v}")));
+            let mut row = vec![number(s.time_s), s.pose.to_string(), s.pass.to_string()];
+            row.extend(s.q.iter().map(|&v| number(v)));
+            row.extend(s.qd.iter().map(|&v| number(v)));
             out += &(row.join(",") + "\n");
         }
         out
@@ -344,14 +344,19 @@ impl GravityPlan {
     }
 }
 
-/// Writes `csv` to `path` and `text` beside it (same name, `.txt`), each atomically; returns the
-/// text file's path.
-pub fn write_plan(path: &Path, csv: &str, text: &str) -> Result<std::path::PathBuf, String> {
+/// Writes `csv` to `path` (see [`crate::output`]) and, when `path` is a file, `text` beside it
+/// (same name, `.txt`), each atomically; returns the text file's path, or `None` when `path` is
+/// standard output, a device or a FIFO: then there is no "beside", and the caller shows the text.
+pub fn write_plan(path: &Path, csv: &str, text: &str) -> Result<Option<std::path::PathBuf>, String> {
+    let beside = crate::output::Destination::of(path).map_err(|e| format!("{}: {e}", path.display()))?.is_file();
     let notes = path.with_extension("txt");
-    if notes == path {
+    if beside && notes == path {
         return Err(format!("{}: give the plan a .csv name (its instructions go to a .txt beside it)", path.display()));
     }
-    write_text_atomic(path, csv).map_err(|e| format!("writing {}: {e}", path.display()))?;
+    write_text_atomic(path, csv).map_err(|e| format!("writing {}: {e}", crate::output::describe(path)))?;
+    if !beside {
+        return Ok(None);
+    }
     write_text_atomic(&notes, text).map_err(|e| format!("writing {}: {e}", notes.display()))?;
-    Ok(notes)
+    Ok(Some(notes))
 }

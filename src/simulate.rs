@@ -115,7 +115,8 @@ pub fn simulate(config: &ArmConfig, initial: &ArmState, input: &TorqueInput) -> 
         }
         rows.push(row);
         if let Some(&next) = input.time.get(r + 1) {
-            sim.step(&mut state, &tau, next - t).map_err(|source| SimulateError::Step { time: t, source })?;
+            sim.step(&mut state, &tau, next - t).map_err(|cause| SimulateError::Step { time: t, cause })?;
+            check_finite(&state, t, next, &tau, sim.settings().internal_step_s)?;
         }
     }
     Ok(Trajectory { names, rows })
@@ -127,22 +128,72 @@ pub enum SimulateError {
     /// The configuration is invalid.
     #[error("invalid configuration: {0}")]
     Config(neurarm_physics::arm::ParamError),
-    /// The state stopped being finite.
-    #[error("at t = {time} s: joint {joint}'s state is no longer finite (a torque too large for the internal step?)")]
+    /// The state stopped being finite (NaN or infinite) in a step.
+    #[error(
+        "joint {joint}'s {quantity} became {value} in the step from t = {from} s to {to} s, under the torques [{}] N·m \
+         integrated in {substeps} RK4 sub-steps of {} s: the motion is too fast for the sub-step; lower the torques \
+         or integrator.internal_step_s (now {internal_step_s} s)",
+        list(.torque),
+        (.to - .from) / *.substeps as f64
+    )]
     Diverged {
         /// Start of the step [s].
-        time: f64,
+        from: f64,
+        /// End of the step [s].
+        to: f64,
         /// Joint (1-based).
         joint: usize,
+        /// Which part of the state: "angle" or "velocity".
+        quantity: &'static str,
+        /// Its value (NaN or ±inf).
+        value: f64,
+        /// The torque command held over the step [N·m], one per joint.
+        torque: Vec<f64>,
+        /// The integrator's longest sub-step [s].
+        internal_step_s: f64,
+        /// Sub-steps the step was split into.
+        substeps: usize,
     },
     /// A step was refused.
-    #[error("at t = {time} s: {source}")]
+    #[error("at t = {time} s: {cause}")]
     Step {
         /// Start of the refused step [s].
         time: f64,
         /// Why.
-        source: StepError,
+        cause: StepError,
     },
+}
+
+/// Numbers as a comma-separated list, for messages.
+fn list(values: &[f64]) -> String {
+    values.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ")
+}
+
+/// Fails with [`SimulateError::Diverged`], naming the first joint whose angle or velocity is no
+/// longer finite after the step from `from` to `to` [s] under `torque` [N·m].
+fn check_finite(state: &ArmState, from: f64, to: f64, torque: &[f64], internal_step_s: f64) -> Result<(), SimulateError> {
+    let bad = state.q.iter().zip(&state.qd).enumerate().find_map(|(i, (&q, &qd))| {
+        if !q.is_finite() {
+            Some((i, "angle", q))
+        } else if !qd.is_finite() {
+            Some((i, "velocity", qd))
+        } else {
+            None
+        }
+    });
+    match bad {
+        None => Ok(()),
+        Some((i, quantity, value)) => Err(SimulateError::Diverged {
+            from,
+            to,
+            joint: i + 1,
+            quantity,
+            value,
+            torque: torque.to_vec(),
+            internal_step_s,
+            substeps: neurarm_physics::arm::integrator::substep_count(to - from, internal_step_s),
+        }),
+    }
 }
 
 /// A plan of `neurarm plan` (see [`crate::plan`]) read back for playing.
@@ -337,10 +388,8 @@ pub fn simulate_plan(config: &ArmConfig, initial: &ArmState, plan: &Plan, step: 
             rows.push(row);
         }
         if k < steps {
-            sim.step(&mut state, &tau, step).map_err(|source| SimulateError::Step { time: t, source })?;
-            if let Some(i) = (0..n).find(|&i| !(state.q[i].is_finite() && state.qd[i].is_finite())) {
-                return Err(SimulateError::Diverged { time: t, joint: i + 1 });
-            }
+            sim.step(&mut state, &tau, step).map_err(|cause| SimulateError::Step { time: t, cause })?;
+            check_finite(&state, t, t + step, &tau, sim.settings().internal_step_s)?;
         }
     }
     Ok(Trajectory { names, rows })

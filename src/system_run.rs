@@ -98,7 +98,7 @@ fn recording_csv(outcome: &RunOutcome) -> String {
                 out.push(',');
             }
             match outcome.column_types[c] {
-                BaseType::Real => out.push_str(&crate::table::number(value)),
+                BaseType::Real => crate::table::push_number(&mut out, value),
                 BaseType::String => {
                     let k = string_columns.iter().position(|&s| s == c).expect("a String column");
                     out.push_str(&field(outcome.texts.get(r).and_then(|t| t.get(k)).map_or("", String::as_str)));

@@ -1,8 +1,9 @@
 //! Numeric CSV tables with a header row: strict reading (every error names the file, line and
-//! column) and atomic writing (a file appears whole or not at all).
+//! column) and writing in the shortest round-trip form, atomically to a file (it appears whole
+//! or not at all), or streamed to standard output (`-`), a device or a FIFO (see
+//! [`crate::output`]).
 
 use std::fmt;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// A CSV file's problem, with where it is. Lines and columns count from 1.
@@ -206,63 +207,151 @@ pub(crate) fn readable_file() -> std::fs::Permissions {
     std::fs::Permissions::from_mode(0o644)
 }
 
-/// Writes `text` to `path` atomically: a temporary file beside it is renamed over `path` once
-/// complete, so a failure leaves no partial file.
+/// Writes `text` to `path` as [`crate::output`] says: a file appears whole or not at all (a
+/// temporary file beside it, renamed over it; through a symbolic link, its target is
+/// replaced), `-` is standard output, a device or FIFO is written directly.
 pub fn write_text_atomic(path: &Path, text: &str) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new().permissions(readable_file()).prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
-    tmp.write_all(text.as_bytes())?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    crate::output::write_bytes(path, text.as_bytes())
 }
 
-/// A number as CSV text: the shorter of its plain and exponent forms, both the shortest that
-/// read back as the same `f64` (`2.2e-308`, not 300 digits; `0.001`, `1e21`).
-pub fn number(x: f64) -> String {
-    let plain = x.to_string();
-    let exponent = format!("{x:e}");
-    if exponent.len() < plain.len() {
-        exponent
-    } else {
-        plain
-    }
-}
-
-/// Writes a numeric table to `path` atomically: the rows go to a temporary file beside it,
-/// which is renamed over `path` only once complete, so a failure leaves no partial file.
-/// Numbers are written in Rust's shortest round-trip form, so reading gives the same bits.
+/// Writes a numeric table to `path` as [`write_text_atomic`] writes text: a file appears whole
+/// or not at all, `-` is standard output, a device or FIFO is streamed. Numbers are written by
+/// [`push_number`]: shortest round-trip form, so reading gives the same bits.
 pub fn write_atomic(path: &Path, names: &[String], rows: impl Iterator<Item = Vec<f64>>) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new().permissions(readable_file()).prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
-    {
-        let mut out = std::io::BufWriter::new(tmp.as_file_mut());
+    crate::output::write_output(path, |out| {
         writeln!(out, "{}", names.join(","))?;
         let mut line = String::new();
         for row in rows {
             line.clear();
-            for (i, v) in row.iter().enumerate() {
+            for (i, &v) in row.iter().enumerate() {
                 if i > 0 {
                     line.push(',');
                 }
-                line.push_str(&number(*v));
+                push_number(&mut line, v);
             }
-            writeln!(out, "{line}")?;
+            line.push('\n');
+            out.write_all(line.as_bytes())?;
         }
-        out.flush()?;
-    }
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+        Ok(())
+    })
+}
+
+/// Appends `value` to `text` as a CSV cell in its shortest round-trip form: the fewest
+/// significant digits that read back as the same `f64` (bit for bit, -0 included), in plain
+/// decimals for magnitudes from 1e-4 to below 1e16 and in exponent form outside (the choice
+/// Python's `repr` makes): `0.25`, `3`, `-0`, `2.2e-308`, `1e16`, `5e-324`. Infinities and NaN
+/// are `inf`, `-inf` and `NaN`, as Rust and numpy read them.
+pub fn push_number(text: &mut String, value: f64) {
+    use std::fmt::Write as _;
+    let magnitude = value.abs();
+    let plain = magnitude == 0.0 || !magnitude.is_finite() || (1e-4..1e16).contains(&magnitude);
+    // Writing to a String cannot fail.
+    let _ = if plain { write!(text, "{value}") } else { write!(text, "{value:e}") };
+}
+
+/// `value` as [`push_number`] writes it.
+pub fn number(value: f64) -> String {
+    let mut text = String::new();
+    push_number(&mut text, value);
+    text
 }
 
 /// An `io::Error` of writing `path` as a message naming the file, for `map_err`.
 pub fn writing(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
     move |e| format!("writing {}: {e}", path.display())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_written_short() {
+        let cases = [
+            (2.2e-308, "2.2e-308"),
+            (0.25, "0.25"),
+            (3.0, "3"),
+            (-0.0, "-0"),
+            (0.0, "0"),
+            (1e16, "1e16"),
+            (1e15, "1000000000000000"),
+            (1e-4, "0.0001"),
+            (9.99e-5, "9.99e-5"),
+            (5e-324, "5e-324"),
+            (f64::MAX, "1.7976931348623157e308"),
+            (f64::MIN_POSITIVE, "2.2250738585072014e-308"),
+            (-123456789.125, "-123456789.125"),
+            (0.1 + 0.2, "0.30000000000000004"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ];
+        for (value, text) in cases {
+            assert_eq!(number(value), text);
+        }
+    }
+
+    /// Significant digits of a number as written (exponent and sign, point and leading zeros left out).
+    fn significant_digits(text: &str) -> usize {
+        let mantissa = text.split('e').next().unwrap();
+        let digits: String = mantissa.chars().filter(char::is_ascii_digit).collect();
+        let trimmed = digits.trim_start_matches('0');
+        // An integer's trailing zeros in plain form are not significant.
+        let trimmed = if mantissa.contains('.') { trimmed } else { trimmed.trim_end_matches('0') };
+        trimmed.len().max(1)
+    }
+
+    #[test]
+    fn every_value_reads_back_bit_identical_from_the_fewest_digits() {
+        let mut values = vec![
+            0.0,
+            -0.0,
+            5e-324,
+            -5e-324,
+            2.2e-308,
+            f64::MIN_POSITIVE,
+            f64::MIN_POSITIVE - 5e-324,
+            1e308,
+            -1e308,
+            f64::MAX,
+            f64::MIN,
+            1.0,
+            -7.0,
+            9007199254740993.0,
+            1e-4,
+            9.999999999999999e-5,
+            1e16,
+            9999999999999998.0,
+            0.1,
+        ];
+        // And many bit patterns, each a finite double (xorshift: no dependency, same every run).
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        while values.len() < 20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = f64::from_bits(x);
+            if v.is_finite() {
+                values.push(v);
+            }
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("extremes.csv");
+        write_atomic(&path, &["v".into(), "twice".into()], values.iter().map(|&v| vec![v, v / 2.0])).unwrap();
+        let table = NumericTable::read(&path, &["v", "twice"]).unwrap();
+        for (k, &v) in values.iter().enumerate() {
+            assert_eq!(table.columns[0][k].to_bits(), v.to_bits(), "{v:e}");
+            assert_eq!(table.columns[1][k].to_bits(), (v / 2.0).to_bits(), "{:e}", v / 2.0);
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let longest = text.lines().flat_map(|l| l.split(',')).map(str::len).max().unwrap();
+        assert!(longest <= 24, "a cell of {longest} characters");
+        // Shortest: one significant digit fewer (rounded either way) does not give the value back.
+        for &v in values.iter().filter(|v| **v != 0.0) {
+            let digits = significant_digits(&number(v));
+            if digits > 1 {
+                let fewer: f64 = format!("{v:.*e}", digits - 2).parse().unwrap();
+                assert_ne!(fewer.to_bits(), v.to_bits(), "{v:e} needs fewer than {digits} digits");
+            }
+        }
+    }
 }

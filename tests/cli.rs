@@ -328,6 +328,8 @@ fn paper_with_unstable_gains_fails_and_keeps_the_earlier_run() {
 fn paper_measures_gravity_at_sampled_poses_over_the_whole_turn() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
+    // Through a symbolic link: the folder it points to gets the run, and the link stays.
+    std::os::unix::fs::symlink("run_folder", &out).unwrap();
     let arm = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/arms/arm3.toml");
     neurarm()
         .args(["paper", "--quick", "--gravity-poses", "120", "--gravity-study", "60", "-c"])
@@ -336,6 +338,8 @@ fn paper_measures_gravity_at_sampled_poses_over_the_whole_turn() {
         .arg(&out)
         .assert()
         .success();
+    assert!(std::fs::symlink_metadata(&out).unwrap().file_type().is_symlink());
+    assert!(dir.path().join("run_folder/results.json").is_file());
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["gravity"]["design"]["kind"].as_str(), Some("sampled"));
     assert_eq!(json["gravity"]["pairs"].as_u64(), Some(120));

@@ -253,6 +253,14 @@ fn bar(len: u64, what: &str) -> ProgressBar {
 /// empty, or an earlier run's folder (it has a `results.json`).
 pub fn run_paper(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&str)) -> Result<PaperRun, String> {
     settings.design_for(arms.joints()).check(arms.joints())?;
+    if crate::output::is_stdout(out) {
+        return Err("the run is a folder (report, data, nets, FMUs, plots): give the folder's name, not '-'".into());
+    }
+    // Through a symbolic link, the folder it points to is the one replaced: the link stays.
+    let out = &crate::output::follow_links(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    if out.exists() && !out.is_dir() {
+        return Err(format!("{} is not a folder: give a folder for the run", out.display()));
+    }
     if out.exists() {
         let empty = std::fs::read_dir(out).map_err(|e| format!("{}: {e}", out.display()))?.next().is_none();
         if !empty && !out.join("results.json").is_file() {
