@@ -171,6 +171,8 @@ pub struct Interface {
     pub guid: String,
     /// `canHandleVariableCommunicationStepSize`.
     pub can_handle_variable_step: bool,
+    /// `canBeInstantiatedOnlyOncePerProcess`.
+    pub only_once_per_process: bool,
     /// The variables in `ModelVariables` order.
     pub variables: Vec<VariableInfo>,
     /// The enumeration types of `TypeDefinitions`.
@@ -212,7 +214,7 @@ impl Interface {
         let mut reader = quick_xml::Reader::from_str(xml);
         let mut version = None;
         let mut guid = None;
-        let mut co_simulation: Option<(String, bool)> = None;
+        let mut co_simulation: Option<(String, bool, bool)> = None;
         let mut variables: Vec<VariableInfo> = Vec::new();
         let mut enumerations: Vec<EnumerationInfo> = Vec::new();
         // The SimpleType being read, and its items once its Enumeration element was seen.
@@ -235,7 +237,9 @@ impl Interface {
                         attribute(e.attributes(), b"canHandleVariableCommunicationStepSize")?,
                         "canHandleVariableCommunicationStepSize",
                     )?;
-                    co_simulation = Some((id, variable));
+                    let once =
+                        flag(attribute(e.attributes(), b"canBeInstantiatedOnlyOncePerProcess")?, "canBeInstantiatedOnlyOncePerProcess")?;
+                    co_simulation = Some((id, variable, once));
                 }
                 Event::Start(e) if e.name().as_ref() == b"SimpleType" => {
                     let name = attribute(e.attributes(), b"name")?.ok_or("a SimpleType has no name")?;
@@ -351,7 +355,8 @@ impl Interface {
             None => return Err("no fmiModelDescription element with an fmiVersion".into()),
         }
         let guid = guid.ok_or("fmiModelDescription has no guid")?;
-        let (model_identifier, can_handle_variable_step) = co_simulation.ok_or("not a Co-Simulation FMU (no CoSimulation element)")?;
+        let (model_identifier, can_handle_variable_step, only_once_per_process) =
+            co_simulation.ok_or("not a Co-Simulation FMU (no CoSimulation element)")?;
         let mut by_name = HashMap::with_capacity(variables.len());
         for (i, v) in variables.iter().enumerate() {
             if by_name.insert(v.name.clone(), i).is_some() {
@@ -401,7 +406,7 @@ impl Interface {
                 }
             };
         }
-        Ok(Self { model_identifier, guid, can_handle_variable_step, variables, enumerations, by_name })
+        Ok(Self { model_identifier, guid, can_handle_variable_step, only_once_per_process, variables, enumerations, by_name })
     }
 
     /// A variable by name.

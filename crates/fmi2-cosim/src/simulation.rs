@@ -43,7 +43,7 @@ use crate::recording::Recorder;
 use crate::schedule::Schedule;
 use crate::spec::{Algorithm, OnDiscard, Value};
 use crate::system::{check_value, split_name, System};
-use crate::unit::Unit;
+use crate::unit::{SharedBinaries, Unit};
 
 /// Steps shorter than this fraction of the communication step are not taken: the stop time
 /// counts as reached.
@@ -114,7 +114,8 @@ impl System {
         }
         let schedule = Schedule::new(&self)?;
         let recorder = Recorder::new(record.to_vec(), self.recordable(record)?);
-        let units = self.units().iter().map(Unit::load).collect::<Result<Vec<_>, _>>()?;
+        let mut shared = SharedBinaries::default();
+        let units = self.units().iter().map(|plan| Unit::load(plan, &mut shared)).collect::<Result<Vec<_>, _>>()?;
         let mut sim = Simulation {
             system: self,
             units,

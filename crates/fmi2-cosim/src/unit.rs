@@ -6,9 +6,16 @@
 //! refuses some documents the standard allows (`<Annotations>` in a variable,
 //! `canHandleMultipleSetPerTimeInstant`, unknown vendor attributes), and everything else the
 //! master needs it has already read itself ([`crate::interface`]).
+//!
+//! FMUs that carry the very same binary (byte for byte, as every FMU of one exporter's runtime
+//! may) share one loaded copy: the unpacked file is a hard link to the first, so the dynamic
+//! loader maps it once. Their instances are then instances of one library, which an FMU that
+//! allows several instances per process must support anyway; one that declares
+//! `canBeInstantiatedOnlyOncePerProcess` is never shared. One copy of the code keeps a loop of
+//! such units in the processor's caches.
 
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::InstanceCS;
@@ -31,13 +38,17 @@ pub(crate) struct Unit {
 }
 
 impl Unit {
-    /// Unpacks and instantiates the FMU of `plan` under the unit's name.
-    pub fn load(plan: &UnitPlan) -> Result<Self, MasterError> {
+    /// Unpacks and instantiates the FMU of `plan` under the unit's name; its binary is shared
+    /// with an identical one in `shared` where it may be.
+    pub fn load(plan: &UnitPlan, shared: &mut SharedBinaries) -> Result<Self, MasterError> {
         capture::install();
         let err = |m: String| MasterError::new(m).unit(&plan.name);
         let path = &plan.path;
         let dir = unpack(path).map_err(|e| err(format!("cannot load {}: {e}", path.display())))?;
         let interface = &plan.interface;
+        if !interface.only_once_per_process {
+            shared.share(&dir.path().join(binary_path(&interface.model_identifier)));
+        }
         let description = format!(
             r#"<?xml version="1.0" encoding="UTF-8"?><fmiModelDescription fmiVersion="2.0" modelName="{id}" guid="{guid}"><CoSimulation modelIdentifier="{id}"/><ModelVariables/><ModelStructure/></fmiModelDescription>"#,
             id = escape(interface.model_identifier.as_str()),
@@ -60,6 +71,49 @@ impl Unit {
         e.log = capture::since(since, &self.name);
         e
     }
+}
+
+/// The binaries already unpacked, to share an identical one (see the module documentation).
+#[derive(Default)]
+pub(crate) struct SharedBinaries {
+    /// (size, CRC-32, path) of each distinct binary so far.
+    seen: Vec<(u64, u32, PathBuf)>,
+}
+
+impl SharedBinaries {
+    /// Replaces the binary at `path` by a hard link to an identical one unpacked before, or
+    /// remembers it. Anything that fails leaves the file as it was (then it is loaded on its
+    /// own, as without sharing).
+    fn share(&mut self, path: &Path) {
+        let Ok(bytes) = std::fs::read(path) else { return };
+        let (size, crc) = (bytes.len() as u64, crc32fast::hash(&bytes));
+        let same = self
+            .seen
+            .iter()
+            .filter(|(s, c, _)| (*s, *c) == (size, crc))
+            .find(|(_, _, p)| std::fs::read(p).is_ok_and(|other| other == bytes))
+            .map(|(_, _, p)| p.clone());
+        match same {
+            Some(first) => {
+                let link = path.with_extension("shared");
+                if std::fs::hard_link(&first, &link).is_ok() && std::fs::rename(&link, path).is_err() {
+                    let _ = std::fs::remove_file(&link);
+                }
+            }
+            None => self.seen.push((size, crc, path.to_owned())),
+        }
+    }
+}
+
+/// The path of an FMU's binary for this platform in its unpacked archive (FMI 2.0 names the
+/// folders linux64, darwin64, win64; aarch64 Linux exporters use linux64 too).
+fn binary_path(model_identifier: &str) -> PathBuf {
+    let folder = match std::env::consts::OS {
+        "windows" => "win64",
+        "macos" => "darwin64",
+        _ => "linux64",
+    };
+    Path::new("binaries").join(folder).join(format!("{model_identifier}{}", std::env::consts::DLL_SUFFIX))
 }
 
 /// The archive at `path` unpacked into a new temporary folder.
