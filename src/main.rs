@@ -555,7 +555,7 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Simulate { system: Some(system), output, on_discard, .. } => {
             use neurarm::system_run::{run_system_file, SystemRunEnd};
-            let run = run_system_file(&system, &output, on_discard).map_err(anyhow::Error::msg)?;
+            let run = run_system_file(&system, &output, on_discard)?;
             for notice in &run.notices {
                 eprintln!("notice: {notice}");
             }
@@ -1226,6 +1226,11 @@ fn main() -> ExitCode {
         Err(e) if e.is::<Interrupted>() => {
             eprintln!("{e}");
             ExitCode::from(130)
+        }
+        // A reader that stopped early (`-o - | head`) is not a failure of ours: end quietly, as
+        // a program that SIGPIPE ends would, without an error message.
+        Err(e) if e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)) => {
+            ExitCode::SUCCESS
         }
         Err(e) => {
             eprintln!("error: {e:#}");

@@ -55,16 +55,18 @@ fn interrupt_flag() -> Result<Arc<AtomicBool>, String> {
 /// Runs the system file at `system` and writes its recording to `output` (a CSV), also when a
 /// unit fails or the run is interrupted (then with the rows so far). `on_discard` overrides
 /// the file's `[simulation] on_discard`.
-pub fn run_system_file(system: &Path, output: &Path, on_discard: Option<OnDiscard>) -> Result<SystemRun, String> {
-    let text = std::fs::read_to_string(system).map_err(|e| format!("reading {}: {e}", system.display()))?;
-    let mut spec = SystemSpec::from_toml(&text, &system.display().to_string())?;
+/// A write error keeps its `std::io::Error` in the chain (a closed pipe can be told apart).
+pub fn run_system_file(system: &Path, output: &Path, on_discard: Option<OnDiscard>) -> anyhow::Result<SystemRun> {
+    use anyhow::Context;
+    let text = std::fs::read_to_string(system).with_context(|| format!("reading {}", system.display()))?;
+    let mut spec = SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
     if let Some(policy) = on_discard {
         spec.simulation.on_discard = policy;
     }
     let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let flag = interrupt_flag()?;
-    let outcome = fmi2_cosim::run(&spec, base, Some(flag)).map_err(|e| format!("{}: {e}", system.display()))?;
-    write_recording(output, &outcome).map_err(|e| format!("writing {}: {e}", output.display()))?;
+    let flag = interrupt_flag().map_err(anyhow::Error::msg)?;
+    let outcome = fmi2_cosim::run(&spec, base, Some(flag)).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
+    write_recording(output, &outcome).with_context(|| format!("writing {}", crate::output::describe(output)))?;
     let end = match (&outcome.end, &outcome.error) {
         (_, Some(e)) => SystemRunEnd::Failed(e.to_string()),
         (Some(RunEnd::Discarded { .. }), None) => SystemRunEnd::Discarded,

@@ -126,3 +126,28 @@ fn ctrl_c_ends_the_run_cleanly_with_the_rows_so_far() {
     let (t, count): (f64, f64) = (last[0].parse().unwrap(), last[1].parse().unwrap());
     assert!(t > 0.0 && (count - t / 1e-3).abs() < 0.5, "a whole last row: {last:?}");
 }
+
+#[test]
+fn a_reader_that_stops_early_ends_the_run_quietly() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    // 200 001 rows: far more than a pipe holds, so writing meets the closed pipe.
+    let system = counter_system(dir.path(), 200.0, 1e-3, "");
+    let binary = assert_cmd::cargo::cargo_bin("neurarm");
+    let mut child = std::process::Command::new(binary)
+        .arg("simulate")
+        .arg(&system)
+        .args(["-o", "-"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+    assert_eq!(first, "time,counter.count,counter.t_last\n");
+    // The reader is dropped here, as `head -1` ends.
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("error"), "{stderr}");
+}
