@@ -80,6 +80,27 @@ def expand(units, spec):
 ORDERINGS = ("gauss-seidel", "delayed", "lagged")
 
 
+def steps_to(stop, step):
+    """The communication steps [s] from 0 to `stop` as our master takes them: whole steps while
+    one fits (to a relative 1e-9), then a last one shortened to land on `stop`."""
+    steps = []
+    while stop - len(steps) * step >= (1 - 1e-9) * step:
+        steps.append(step)
+    rest = stop - len(steps) * step
+    if rest > 1e-9 * step:
+        steps.append(rest)
+    return steps
+
+
+def whole_steps(run, step):
+    """A master's run (rows: the start, then one per step) up to its last whole step: engines with
+    a fixed step (libcosim, the Toolbox's container) do not shorten the last one."""
+    n = len(run["time"])
+    if n > 1 and not np.isclose(run["time"][-1] - run["time"][-2], step, rtol=1e-9, atol=0):
+        n -= 1
+    return {name: column[:n] for name, column in run.items()}
+
+
 def python_loop(paper, loop, ordering, stop, step, record=None, order=None):
     """The loop stepped here. Rows as the master records them: after each step, the recorded
     variables (the system file's, or `record`).
@@ -114,16 +135,16 @@ def python_loop(paper, loop, ordering, stop, step, record=None, order=None):
         for key in held:
             held[key] = units[key[0]].get([key[1]])[0]
     rows, time = [], 0.0
-    for k in range(int(round(stop / step))):
+    for k, h in enumerate(steps_to(stop, step)):
         if ordering == "gauss-seidel":
             for u in order:
                 fresh_inputs(u)
-                units[u].fmu.doStep(currentCommunicationPoint=k * step, communicationStepSize=step)
+                units[u].fmu.doStep(currentCommunicationPoint=k * step, communicationStepSize=h)
         else:
             for u in order:
                 units[u].set([inp for _, _, inp in inputs[u]], [held[(fu, out)] for fu, out, _ in inputs[u]])
                 t = time if ordering == "delayed" else k * step  # simulate_ssp sums its times
-                units[u].fmu.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+                units[u].fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
             for key in held:
                 held[key] = units[key[0]].get([key[1]])[0]
             time += step
