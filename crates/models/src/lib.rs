@@ -173,9 +173,20 @@ pub fn instantiate(resources: Option<&Path>) -> Result<Box<dyn Model>, ModelErro
         return Err(ModelError::msg(format!("resource folder '{}' does not exist", resources.display())));
     }
     let path = resources.join(SPEC_FILE);
-    let text = std::fs::read_to_string(&path).map_err(|e| ModelError::msg(format!("cannot read {}: {e}", path.display())))?;
+    let text = neurarm_physics::text_file::read_text(&path, neurarm_physics::text_file::MAX_CONFIG_BYTES)
+        .map_err(|e| ModelError::msg(format!("cannot read {}: {e}", path.display())))?;
     let spec = FmuSpec::from_toml(&text).map_err(|e| ModelError::msg(format!("{}: {e}", path.display())))?;
     spec.build_from(Some(resources)).map_err(|e| ModelError::msg(format!("{}: {e}", path.display())))
+}
+
+/// The path of the file `name` in `resources`: a plain file name, so a spec cannot make the
+/// FMU read files outside its own resources (`../../secret`, `/etc/passwd`).
+pub(crate) fn resource_file(resources: &Path, name: &str) -> Result<PathBuf, BuildError> {
+    let mut parts = Path::new(name).components();
+    match (parts.next(), parts.next()) {
+        (Some(std::path::Component::Normal(part)), None) if part == name => Ok(resources.join(name)),
+        _ => Err(BuildError::Spec(format!("resource file '{name}' is not a plain file name in resources/"))),
+    }
 }
 
 /// One real variable per joint, made by `add(b, i)` for i = 0 … n − 1 (variable `…_{i + 1}`).
