@@ -531,7 +531,8 @@ fn initial_vector(name: &str, given: Option<Vec<f64>>, n: usize) -> Result<Vec<f
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Simulate { system: Some(system), output, .. } => {
-            let text = std::fs::read_to_string(&system).with_context(|| format!("reading {}", system.display()))?;
+            let text = neurarm_physics::text_file::read_text(&system, neurarm_physics::text_file::MAX_CONFIG_BYTES)
+                .with_context(|| format!("reading {}", system.display()))?;
             let spec = fmi2_cosim::SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
             let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
             let outcome = fmi2_cosim::run(&spec, base).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
@@ -816,13 +817,26 @@ fn run(cli: Cli) -> Result<()> {
             let columns: Vec<&[f64]> = names.iter().map(|n| table.column(n).expect("required")).collect();
             let mut header: Vec<String> = names.iter().map(|s| s.to_string()).collect();
             header.extend(weights.outputs.iter().map(|s| s.name.clone()));
-            let rows = (0..table.rows()).map(|r| {
+            let mut rows = Vec::with_capacity(table.rows());
+            for r in 0..table.rows() {
                 let x: Vec<f64> = columns.iter().map(|c| c[r]).collect();
-                let mut row = x.clone();
-                row.extend(mlp.evaluate(&x));
-                row
-            });
-            write_atomic(&output, &header, rows).with_context(|| format!("writing {}", output.display()))?;
+                let y = mlp.evaluate(&x);
+                // Checked before anything is written: an input far outside the net's training
+                // range can overflow it, and a table with inf in it is no result.
+                if let Some(k) = y.iter().position(|v| !v.is_finite()) {
+                    bail!(
+                        "{}, line {}: the net's output '{}' is {} for these inputs (far outside the range it was trained on?); nothing was written",
+                        data.display(),
+                        table.line(r),
+                        weights.outputs[k].name,
+                        neurarm_physics::arm::show_number(y[k])
+                    );
+                }
+                let mut row = x;
+                row.extend(y);
+                rows.push(row);
+            }
+            write_atomic(&output, &header, rows.into_iter()).with_context(|| format!("writing {}", output.display()))?;
             eprintln!("wrote {} rows to {}", table.rows(), output.display());
         }
         Command::Export(Export::Compensator { friction, gravity, ideal: true, config, name, output }) => {
