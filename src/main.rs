@@ -421,7 +421,7 @@ enum Export {
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
-    /// A controller of the paper's loops as an FMU, for an arm of any joint count; the variable
+    /// A controller of the paper's loops as an FMU, for an arm of 1 to 64 joints; the variable
     /// names are those the loops of `neurarm paper` connect.
     #[command(subcommand)]
     Controller(Controller),
