@@ -444,7 +444,7 @@ enum Export {
         #[arg(long, short = 'o')]
         output: PathBuf,
     },
-    /// A controller of the paper's loops as an FMU, for an arm of any joint count; the variable
+    /// A controller of the paper's loops as an FMU, for an arm of 1 to 64 joints; the variable
     /// names are those the loops of `neurarm paper` connect.
     #[command(subcommand)]
     Controller(Controller),
@@ -860,13 +860,26 @@ fn run(cli: Cli) -> Result<()> {
             let columns: Vec<&[f64]> = names.iter().map(|n| table.column(n).expect("required")).collect();
             let mut header: Vec<String> = names.iter().map(|s| s.to_string()).collect();
             header.extend(weights.outputs.iter().map(|s| s.name.clone()));
-            let rows = (0..table.rows()).map(|r| {
+            let mut rows = Vec::with_capacity(table.rows());
+            for r in 0..table.rows() {
                 let x: Vec<f64> = columns.iter().map(|c| c[r]).collect();
-                let mut row = x.clone();
-                row.extend(mlp.evaluate(&x));
-                row
-            });
-            write_atomic(&output, &header, rows).with_context(|| format!("writing {}", describe(&output)))?;
+                let y = mlp.evaluate(&x);
+                // Checked before anything is written: an input far outside the net's training
+                // range can overflow it, and a table with inf in it is no result.
+                if let Some(k) = y.iter().position(|v| !v.is_finite()) {
+                    bail!(
+                        "{}, line {}: the net's output '{}' is {} for these inputs (far outside the range it was trained on?); nothing was written",
+                        data.display(),
+                        table.line(r),
+                        weights.outputs[k].name,
+                        neurarm_physics::arm::show_number(y[k])
+                    );
+                }
+                let mut row = x;
+                row.extend(y);
+                rows.push(row);
+            }
+            write_atomic(&output, &header, rows.into_iter()).with_context(|| format!("writing {}", describe(&output)))?;
             eprintln!("wrote {} rows to {}", table.rows(), describe(&output));
         }
         Command::Export(Export::Compensator { friction, gravity, ideal: true, config, name, output }) => {

@@ -58,7 +58,8 @@ fn interrupt_flag() -> Result<Arc<AtomicBool>, String> {
 /// A write error keeps its `std::io::Error` in the chain (a closed pipe can be told apart).
 pub fn run_system_file(system: &Path, output: &Path, on_discard: Option<OnDiscard>) -> anyhow::Result<SystemRun> {
     use anyhow::Context;
-    let text = std::fs::read_to_string(system).with_context(|| format!("reading {}", system.display()))?;
+    let text = neurarm_physics::text_file::read_text(system, neurarm_physics::text_file::MAX_CONFIG_BYTES)
+        .with_context(|| format!("reading {}", system.display()))?;
     let mut spec = SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
     if let Some(policy) = on_discard {
         spec.simulation.on_discard = policy;

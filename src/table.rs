@@ -62,14 +62,29 @@ impl NumericTable {
         Self::read_selected(path, wanted, true)
     }
 
+    /// Reads a table from `source` as [`NumericTable::read`] reads a file; `path` names the
+    /// source in messages.
+    pub fn from_reader(source: Box<dyn std::io::Read>, path: &Path, required: &[&str]) -> Result<Self, TableError> {
+        Self::parse(csv_reader_of(source), path, required, false)
+    }
+
     fn read_selected(path: &Path, required: &[&str], only: bool) -> Result<Self, TableError> {
+        let reader = csv_reader(path).map_err(|e| TableError {
+            path: path.to_path_buf(),
+            line: None,
+            column: None,
+            message: format!("cannot open: {e}"),
+        })?;
+        Self::parse(reader, path, required, only)
+    }
+
+    fn parse(mut reader: csv::Reader<Box<dyn std::io::Read>>, path: &Path, required: &[&str], only: bool) -> Result<Self, TableError> {
         let err = |line: Option<u64>, column: Option<(usize, String)>, message: String| TableError {
             path: path.to_path_buf(),
             line,
             column,
             message,
         };
-        let mut reader = csv_reader(path).map_err(|e| err(None, None, format!("cannot open: {e}")))?;
         let (names, units): (Vec<String>, Vec<Option<String>>) = reader
             .headers()
             .map_err(|e| err(Some(1), None, format!("cannot read the header: {}", csv_cause(&e))))?
@@ -160,7 +175,9 @@ impl NumericTable {
     }
 }
 
-/// A CSV reader of `path`, decompressing a `.gz` file on the fly (logs are large).
+/// A CSV reader of `path`, decompressing a `.gz` file on the fly (logs are large). Lines are
+/// limited to [`MAX_LINE_BYTES`], so a file that is no table (`/dev/zero`, a binary) ends in
+/// an error at once instead of filling the memory; the rows are read as they come.
 pub(crate) fn csv_reader(path: &Path) -> std::io::Result<csv::Reader<Box<dyn std::io::Read>>> {
     let file = std::fs::File::open(path)?;
     let source: Box<dyn std::io::Read> = if path.extension().is_some_and(|e| e == "gz") {
@@ -168,7 +185,46 @@ pub(crate) fn csv_reader(path: &Path) -> std::io::Result<csv::Reader<Box<dyn std
     } else {
         Box::new(file)
     };
-    Ok(csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(source))
+    Ok(csv_reader_of(source))
+}
+
+/// A CSV reader of `source` (see [`csv_reader`]).
+pub fn csv_reader_of(source: Box<dyn std::io::Read>) -> csv::Reader<Box<dyn std::io::Read>> {
+    let limited: Box<dyn std::io::Read> = Box::new(LineLimit { inner: source, line: 1, length: 0 });
+    csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(limited)
+}
+
+/// Longest line of a CSV file read [bytes]: a row of a thousand numbers is under 30 kB.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// Passes bytes through, failing once a line grows beyond [`MAX_LINE_BYTES`].
+struct LineLimit {
+    inner: Box<dyn std::io::Read>,
+    /// The line being read (from 1).
+    line: u64,
+    /// Its bytes so far.
+    length: usize,
+}
+
+impl std::io::Read for LineLimit {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in &buf[..n] {
+            if b == b'\n' {
+                self.line += 1;
+                self.length = 0;
+            } else {
+                self.length += 1;
+                if self.length > MAX_LINE_BYTES {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        format!("line {} is longer than {} MiB: this is not a CSV table", self.line, MAX_LINE_BYTES >> 20),
+                    ));
+                }
+            }
+        }
+        Ok(n)
+    }
 }
 
 /// A header cell as (name, unit): `qd_1 [rad/s]` is (`qd_1`, `rad/s`); a cell without brackets

@@ -123,6 +123,17 @@ impl<'a> Reader<'a> {
         let n = self.count("values", expected)?;
         (0..n).map(|_| self.f64()).collect()
     }
+    /// Reads a length-prefixed list of exactly `expected` `f64`, each a finite number: a
+    /// model's state is made of numbers its steps produced, which are finite, so NaN or an
+    /// infinity is an altered state. `what` names the list in the error.
+    pub fn finite_f64s(&mut self, what: &'static str, expected: usize) -> Result<Vec<f64>, StateError> {
+        let n = self.count(what, expected)?;
+        let values = (0..n).map(|_| self.f64()).collect::<Result<Vec<_>, _>>()?;
+        match values.iter().position(|v| !v.is_finite()) {
+            Some(i) => Err(StateError::Invalid(format!("{what}[{i}] = {} is not a finite number", values[i]))),
+            None => Ok(values),
+        }
+    }
     /// Reads a `u32` length that must be `expected`; `what` names the list in the error.
     pub fn count(&mut self, what: &'static str, expected: usize) -> Result<usize, StateError> {
         let found = self.u32()? as usize;
@@ -139,5 +150,24 @@ impl<'a> Reader<'a> {
         } else {
             Err(StateError::TrailingBytes(self.bytes.len() - self.at))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finite_lists_refuse_nan_and_infinities_by_position() {
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut bytes = Vec::new();
+            bytes.put_f64s(&[1.0, bad, 3.0]);
+            let e = Reader::new(&bytes).finite_f64s("q", 3).unwrap_err().to_string();
+            assert_eq!(e, format!("invalid state: q[1] = {bad} is not a finite number"));
+        }
+        let mut bytes = Vec::new();
+        bytes.put_f64s(&[1.0, -2.5, f64::MAX]);
+        assert_eq!(Reader::new(&bytes).finite_f64s("q", 3).unwrap(), vec![1.0, -2.5, f64::MAX]);
+        assert!(matches!(Reader::new(&bytes).finite_f64s("q", 2), Err(StateError::Count { found: 3, expected: 2, .. })));
     }
 }

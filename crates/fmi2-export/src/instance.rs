@@ -4,12 +4,16 @@
 //!
 //! Refusals and failures:
 //! * a call in a state that does not allow it, or with a bad argument (unknown value
-//!   reference, wrong type, a variable that may not be set now, NaN, h <= 0, a wrong
-//!   communication point), returns `Error` after logging why, and changes nothing: the
-//!   instance goes on as before (as the Modelica Reference-FMUs do);
+//!   reference, wrong type, a variable that may not be set now, NaN, a tolerance that is not
+//!   finite and > 0, h <= 0, a wrong communication point, a step past the stop time or to a
+//!   time that is not finite or not later, an FMU state holding numbers that are not finite),
+//!   returns `Error` after logging why, and changes nothing: the instance goes on as before
+//!   (as the Modelica Reference-FMUs do);
 //! * a failure of the model itself (invalid parameters at initialization, a step that cannot
 //!   be taken) returns `Error` and puts the instance in the error state, where the standard
 //!   allows only getting values, restoring an FMU state, `fmi2Reset` and `fmi2FreeInstance`.
+//!   A model call that leaves a Real variable NaN or infinite is such a failure, named by the
+//!   variable; and `fmi2GetReal` never returns `fmi2OK` with a number that is not finite.
 
 use crate::codec::{Put, Reader, StateError};
 use crate::description::{BaseType, Kind, ModelDescription, SetPhase, LOG_CATEGORIES};
@@ -121,11 +125,19 @@ pub struct Snapshot {
 }
 
 /// Why an instance could not be made.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum InstantiateError {
     /// `instanceName` is empty.
     #[error("the instance name is empty")]
     EmptyName,
+    /// A Real variable's start value is NaN or infinite (the model was built from bad data).
+    #[error("the start value of '{name}' is {value}, not a finite number")]
+    NonFiniteStart {
+        /// The variable.
+        name: String,
+        /// Its start value.
+        value: f64,
+    },
     /// The host's GUID is not the model's.
     #[error("GUID {given} does not match this FMU's {expected}: the modelDescription.xml and the binary or resources differ")]
     WrongGuid {
@@ -145,6 +157,8 @@ pub struct Instance {
     start_values: Values,
     phase: Phase,
     start_time: f64,
+    /// The stop time set by `fmi2SetupExperiment`, if it set one [s].
+    stop_time: Option<f64>,
     time: f64,
     dirty: bool,
     /// The last step was discarded because the model asks to end the simulation.
@@ -163,6 +177,16 @@ pub struct Instance {
 const STATE_MAGIC: &[u8; 8] = b"F2XSTATE";
 /// Version of the serialized FMU state format.
 const STATE_VERSION: u32 = 1;
+
+/// `value` for a message: as written for ordinary magnitudes, in exponent form beyond them
+/// (1.7e308 rather than 309 digits).
+fn show(value: f64) -> String {
+    if value == 0.0 || !value.is_finite() || (1e-4..1e15).contains(&value.abs()) {
+        value.to_string()
+    } else {
+        format!("{value:e}")
+    }
+}
 
 fn phase_from(code: u8) -> Result<Phase, StateError> {
     use Phase::*;
@@ -193,6 +217,10 @@ impl Instance {
             slot[vr] = Some(i);
         }
         let values = Values::start(description);
+        if let Some(vr) = values.reals.iter().position(|v| !v.is_finite()) {
+            let name = lookup[BaseType::Real.slot()].get(vr).copied().flatten().map(|i| description.variables[i].name.clone());
+            return Err(InstantiateError::NonFiniteStart { name: name.unwrap_or_else(|| format!("#{vr}")), value: values.reals[vr] });
+        }
         Ok(Self {
             name: name.to_owned(),
             guid: expected,
@@ -201,6 +229,7 @@ impl Instance {
             model,
             phase: Phase::Instantiated,
             start_time: 0.0,
+            stop_time: None,
             time: 0.0,
             dirty: true,
             terminated: false,
@@ -290,11 +319,18 @@ impl Instance {
             if !(stop >= start_time) {
                 return self.error(&format!("fmi2SetupExperiment: stop time {stop} is before start time {start_time}"));
             }
+            if !stop.is_finite() {
+                return self.error(&format!("fmi2SetupExperiment: stop time {stop} is not finite (leave it undefined for no stop time)"));
+            }
         }
         if let Some(t) = tolerance {
+            if !(t.is_finite() && t > 0.0) {
+                return self.error(&format!("fmi2SetupExperiment: tolerance {} must be finite and > 0", show(t)));
+            }
             self.trace(|| format!("fmi2SetupExperiment: tolerance {t} ignored (fixed-step model)"));
         }
         self.start_time = start_time;
+        self.stop_time = stop_time;
         self.time = start_time;
         Status::Ok
     }
@@ -315,6 +351,10 @@ impl Instance {
         }
         match self.model.initialize(&mut self.values, self.start_time) {
             Ok(()) => {
+                if let Some(why) = self.non_finite_real() {
+                    self.phase = Phase::Error;
+                    return self.error(&format!("fmi2ExitInitializationMode: {why}"));
+                }
                 self.dirty = false;
                 self.time = self.start_time;
                 self.phase = Phase::StepComplete;
@@ -345,6 +385,7 @@ impl Instance {
         self.values = self.start_values.clone();
         self.phase = Phase::Instantiated;
         self.start_time = 0.0;
+        self.stop_time = None;
         self.time = 0.0;
         self.dirty = true;
         self.terminated = false;
@@ -384,6 +425,9 @@ impl Instance {
             if let Err(e) = computed {
                 return Err(self.error(&format!("{function}: {e}")));
             }
+            if let Some(why) = self.non_finite_real() {
+                return Err(self.error(&format!("{function}: {why}")));
+            }
             self.dirty = false;
         }
         Ok(())
@@ -408,9 +452,20 @@ impl Instance {
         Status::Ok
     }
 
-    /// `fmi2GetReal`.
+    /// `fmi2GetReal`: a value that is not a finite number (left by a failed model call) is
+    /// refused by name, never returned with `fmi2OK`.
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
-        self.get("fmi2GetReal", BaseType::Real, vrs, out, |v, i| v.reals[i])
+        match self.get("fmi2GetReal", BaseType::Real, vrs, out, |v, i| v.reals[i]) {
+            Status::Ok => match vrs.iter().find(|&&vr| !self.values.reals[vr as usize].is_finite()) {
+                Some(&vr) => self.error(&format!(
+                    "fmi2GetReal: '{}' is {}, not a finite number: the model call that computed it failed",
+                    self.real_name(vr),
+                    show(self.values.reals[vr as usize])
+                )),
+                None => Status::Ok,
+            },
+            s => s,
+        }
     }
     /// `fmi2GetInteger`.
     pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
@@ -512,12 +567,8 @@ impl Instance {
         if let Err(s) = self.check_phase("fmi2DoStep", Function::DoStep) {
             return s;
         }
-        if !(step.is_finite() && step > 0.0) {
-            return self.error(&format!("fmi2DoStep: communication step size {step} must be finite and > 0"));
-        }
-        let tolerance = 1e-9 * self.time.abs().max(1.0);
-        if !current.is_finite() || (current - self.time).abs() > tolerance {
-            return self.error(&format!("fmi2DoStep: currentCommunicationPoint {current} differs from the FMU's time {}", self.time));
+        if let Err(s) = self.check_step(current, step) {
+            return s;
         }
         if !self.model.description().can_handle_variable_step {
             match self.fixed_step {
@@ -532,6 +583,10 @@ impl Instance {
         }
         match self.model.do_step(&mut self.values, current, step) {
             Ok(()) => {
+                if let Some(why) = self.non_finite_real() {
+                    self.phase = Phase::Error;
+                    return self.error(&format!("fmi2DoStep at t = {current} s: {why}"));
+                }
                 self.time = current + step;
                 self.dirty = false;
                 Status::Ok
@@ -551,6 +606,77 @@ impl Instance {
                     self.error(&format!("fmi2DoStep at t = {current} s: {e}"))
                 }
             },
+        }
+    }
+
+    /// Checks the arguments of `fmi2DoStep`: a finite step > 0 from the FMU's own time, ending
+    /// at a later time that a double can hold, and not past the stop time of
+    /// `fmi2SetupExperiment` (beyond a relative 1e-9, as the Reference-FMUs refuse it).
+    fn check_step(&self, current: f64, step: f64) -> Result<(), Status> {
+        if !(step.is_finite() && step > 0.0) {
+            return Err(self.error(&format!("fmi2DoStep: communication step size {} must be finite and > 0", show(step))));
+        }
+        let tolerance = 1e-9 * self.time.abs().max(1.0);
+        if !current.is_finite() || (current - self.time).abs() > tolerance {
+            return Err(self.error(&format!(
+                "fmi2DoStep: currentCommunicationPoint {} differs from the FMU's time {}",
+                show(current),
+                show(self.time)
+            )));
+        }
+        let end = current + step;
+        if !(end.is_finite() && end > current) {
+            return Err(self.error(&format!(
+                "fmi2DoStep: a step of {} s from t = {} s ends at {}, not at a later time a double can hold",
+                show(step),
+                show(current),
+                show(end)
+            )));
+        }
+        if let Some(stop) = self.stop_time {
+            if end > stop + 1e-9 * stop.abs().max(1.0) {
+                return Err(self.error(&format!(
+                    "fmi2DoStep: at t = {} s a step of {} s was requested, past the stop time {} s of fmi2SetupExperiment",
+                    show(current),
+                    show(step),
+                    show(stop)
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The name of the Real variable `vr`, for messages.
+    fn real_name(&self, vr: u32) -> String {
+        match self.index_of(BaseType::Real, vr) {
+            Some(i) => self.model.description().variables[i].name.clone(),
+            None => format!("value reference {vr}"),
+        }
+    }
+
+    /// After a model call: every Real variable must be a finite number; the first that is not
+    /// is named in the returned reason.
+    fn non_finite_real(&self) -> Option<String> {
+        let vr = self.values.reals.iter().position(|v| !v.is_finite())?;
+        Some(format!("the model computed {} for '{}', not a finite number", show(self.values.reals[vr]), self.real_name(vr as u32)))
+    }
+
+    /// Refuses an FMU state with times or Real values that are not finite numbers, or a time
+    /// before the start time: no instance of this layer saves such a state.
+    fn check_snapshot(&self, snapshot: &Snapshot) -> Result<(), String> {
+        for (what, t) in [("time", snapshot.time), ("start time", snapshot.start_time)] {
+            if !t.is_finite() {
+                return Err(format!("the state's {what} is {}, not a finite number", show(t)));
+            }
+        }
+        if snapshot.time < snapshot.start_time {
+            return Err(format!("the state's time {} s is before its start time {} s", show(snapshot.time), show(snapshot.start_time)));
+        }
+        match snapshot.values.reals.iter().position(|v| !v.is_finite()) {
+            Some(vr) => {
+                Err(format!("the state holds {} for '{}', not a finite number", show(snapshot.values.reals[vr]), self.real_name(vr as u32)))
+            }
+            None => Ok(()),
         }
     }
 
@@ -579,6 +705,9 @@ impl Instance {
     pub fn set_state(&mut self, snapshot: &Snapshot) -> Status {
         if let Err(s) = self.check_phase("fmi2SetFMUstate", Function::FmuState) {
             return s;
+        }
+        if let Err(e) = self.check_snapshot(snapshot) {
+            return self.error(&format!("fmi2SetFMUstate: {e}"));
         }
         if let Err(e) = self.model.load_state(&snapshot.values, &snapshot.model) {
             return self.error(&format!("fmi2SetFMUstate: {e}"));
@@ -677,7 +806,9 @@ impl Instance {
         if phase == Phase::Fatal {
             return Err(invalid("a state saved in the fatal state cannot be restored".into()));
         }
-        Ok(Snapshot { phase, time, start_time, values: Values { reals, integers, booleans, strings }, model })
+        let snapshot = Snapshot { phase, time, start_time, values: Values { reals, integers, booleans, strings }, model };
+        self.check_snapshot(&snapshot).map_err(invalid)?;
+        Ok(snapshot)
     }
 
     /// The model's description.

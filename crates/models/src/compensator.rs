@@ -35,10 +35,15 @@ pub struct NnCompensatorSpec {
 impl ModelKind for NnCompensatorSpec {
     fn build(&self, identifier: &str, resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
         let dir = resources.ok_or(BuildError::NoResources)?;
+        neurarm_physics::arm::check_joint_count(self.joints)?;
+        if self.friction.len() > self.joints {
+            return Err(BuildError::Spec(format!("{} friction nets for {} joints", self.friction.len(), self.joints)));
+        }
         let mut crc = crc32fast::Hasher::new();
         let mut load = |name: &str| -> Result<WeightsFile, BuildError> {
-            let path = dir.join(name);
-            let text = std::fs::read_to_string(&path).map_err(|e| BuildError::Weights { path: path.clone(), message: e.to_string() })?;
+            let path = crate::resource_file(dir, name)?;
+            let text = neurarm_physics::text_file::read_text(&path, neurarm_physics::text_file::MAX_WEIGHTS_BYTES)
+                .map_err(|e| BuildError::Weights { path: path.clone(), message: e.to_string() })?;
             crc.update(text.as_bytes());
             WeightsFile::from_json(&text, &path.display().to_string()).map_err(|e| BuildError::Spec(e.to_string()))
         };
@@ -179,9 +184,7 @@ impl NnCompensatorModel {
         enable: (bool, bool),
         fingerprint: u32,
     ) -> Result<Self, BuildError> {
-        if joints == 0 {
-            return Err(BuildError::Spec("the compensator needs at least one joint".into()));
-        }
+        neurarm_physics::arm::check_joint_count(joints)?;
         let names: Vec<String> = (1..=friction.len()).map(|i| format!("friction net {i}")).collect();
         let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(friction).collect();
         let found = check_compensator_nets(&named, gravity.map(|g| ("the gravity net", g))).map_err(BuildError::Spec)?;

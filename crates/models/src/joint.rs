@@ -79,9 +79,7 @@ impl JointControllerModel {
     /// A controller for `joints` joints with gains `kp` [N·m/rad] and `kd` [N·m·s/rad] on
     /// every joint, following the built-in sequence if `use_sequence`.
     pub fn new(identifier: &str, joints: usize, kp: f64, kd: f64, use_sequence: bool) -> Result<Self, BuildError> {
-        if joints == 0 {
-            return Err(BuildError::Spec("the controller needs at least one joint".into()));
-        }
+        neurarm_physics::arm::check_joint_count(joints)?;
         let mut b = TableBuilder::new();
         let ControllerInputs { q, qd, tau_comp } = ControllerInputs::declare(&mut b, joints, &vec![0.0; joints]);
         let q_ref = per_joint(&mut b, joints, |b, i| {

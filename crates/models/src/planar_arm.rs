@@ -433,8 +433,8 @@ impl Model for PlanarArmModel {
         let n = self.state.q.len();
         let mut r = Reader::new(bytes);
         let running = r.u8()?;
-        let q = r.f64s(n)?;
-        let qd = r.f64s(n)?;
+        let q = r.finite_f64s("q", n)?;
+        let qd = r.finite_f64s("qd", n)?;
         let position = r.u64()? as u128 | (r.u64()? as u128) << 64;
         r.finish()?;
         match running {

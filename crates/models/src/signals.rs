@@ -105,7 +105,7 @@ impl Model for IntegratorModel {
 
     fn load_state(&mut self, _values: &Values, bytes: &[u8]) -> Result<(), ModelError> {
         let mut r = Reader::new(bytes);
-        let s = r.f64s(1)?;
+        let s = r.finite_f64s("y", 1)?;
         r.finish()?;
         self.state = s[0];
         Ok(())

@@ -156,6 +156,12 @@ impl StaticModel for TaskSpaceControllerModel {
         let centre = Vector2::new(values[self.centre[0]], values[self.centre[1]]);
         let gains = TaskSpaceGains { kp: values[self.kp], kd: values[self.kd], null_damping: values[self.null_damping] };
         let (position, velocity, acceleration) = scaled_reference(time, centre, values[self.scale]);
+        if ![position, velocity, acceleration].iter().all(|v| v.x.is_finite() && v.y.is_finite()) {
+            return Err(ModelError::msg(format!(
+                "the reference at t = {} s is not finite: the time or the reference's centre or scale is too large",
+                neurarm_physics::arm::show_number(time)
+            )));
+        }
         let x = end_effector_position(&self.model, q);
         values[self.reference[0]] = position.x;
         values[self.reference[1]] = position.y;

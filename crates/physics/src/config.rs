@@ -25,13 +25,14 @@ pub struct ArmConfig {
 /// Why a configuration file could not be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    /// The file could not be read.
-    #[error("{path}: {source}")]
+    /// The file could not be read. (The causes are fields of the message, not error sources,
+    /// so a caller printing the chain does not print them twice.)
+    #[error("{path}: {cause}")]
     Io {
         /// The file.
         path: String,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// The TOML is malformed or has an unknown or missing key.
     #[error("{path}: {message}")]
@@ -42,12 +43,12 @@ pub enum ConfigError {
         message: String,
     },
     /// A value is out of range.
-    #[error("{path}: {source}")]
+    #[error("{path}: {problem}")]
     Invalid {
         /// The file.
         path: String,
         /// What is wrong.
-        source: ParamError,
+        problem: ParamError,
     },
 }
 
@@ -55,10 +56,11 @@ impl ArmConfig {
     /// Reads and checks a TOML file.
     pub fn from_toml_file(path: &Path) -> Result<Self, ConfigError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: shown.clone(), source })?;
+        let text = crate::text_file::read_text(path, crate::text_file::MAX_CONFIG_BYTES)
+            .map_err(|cause| ConfigError::Io { path: shown.clone(), cause })?;
         Self::from_toml_str(&text).map_err(|e| match e {
             ConfigError::Parse { message, .. } => ConfigError::Parse { path: shown.clone(), message },
-            ConfigError::Invalid { source, .. } => ConfigError::Invalid { path: shown.clone(), source },
+            ConfigError::Invalid { problem, .. } => ConfigError::Invalid { path: shown.clone(), problem },
             other => other,
         })
     }
@@ -67,7 +69,7 @@ impl ArmConfig {
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
         let config: Self =
             toml::from_str(text).map_err(|e| ConfigError::Parse { path: "<text>".into(), message: e.to_string().trim_end().to_owned() })?;
-        config.validate().map_err(|source| ConfigError::Invalid { path: "<text>".into(), source })?;
+        config.validate().map_err(|problem| ConfigError::Invalid { path: "<text>".into(), problem })?;
         Ok(config)
     }
 
@@ -76,12 +78,16 @@ impl ArmConfig {
         toml::to_string_pretty(self).expect("every field serialises to TOML")
     }
 
-    /// Checks every value.
+    /// Checks every value, each within its [`limits`](crate::arm::params::limits) (the RK4
+    /// sub-step between 1 ns and 1 s).
     pub fn validate(&self) -> Result<(), ParamError> {
         self.arm.validate()?;
         self.hardware.validate(self.arm.dof())?;
         let h = self.integrator.internal_step_s;
-        crate::arm::params::check(|| "integrator.internal_step_s".into(), h, h > 0.0, "must be > 0")
+        let (shortest, longest) = crate::arm::params::limits::INTERNAL_STEP_S;
+        let why = "must be between 1e-9 s and 1 s (limits::INTERNAL_STEP_S)";
+        crate::arm::params::check(|| "integrator.internal_step_s".into(), h, h > 0.0, "must be > 0")?;
+        crate::arm::params::check(|| "integrator.internal_step_s".into(), h, (shortest..=longest).contains(&h), why)
     }
 
     /// A simulator with the configured torque limits, and the configured sensors.

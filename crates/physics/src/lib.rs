@@ -14,3 +14,4 @@ pub mod config;
 pub mod control;
 pub mod linalg;
 pub mod nn;
+pub mod text_file;

@@ -26,7 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::params::{check, ParamError};
+use super::params::{check_within, limits, ParamError};
 
 /// Friction magnitudes for one direction of motion.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -72,12 +72,18 @@ impl FrictionBranch {
 
     fn validate(&self, name: impl Fn() -> String) -> Result<(), ParamError> {
         let f = |field: &str| format!("{}.{field}", name());
-        check(|| f("coulomb_nm"), self.coulomb_nm, self.coulomb_nm >= 0.0, "must be >= 0")?;
-        check(|| f("static_nm"), self.static_nm, self.static_nm >= self.coulomb_nm, "must be >= coulomb_nm")?;
-        check(|| f("stribeck_velocity_rad_s"), self.stribeck_velocity_rad_s, self.stribeck_velocity_rad_s > 0.0, "must be > 0")?;
-        check(|| f("viscous_nms_rad"), self.viscous_nms_rad, self.viscous_nms_rad >= 0.0, "must be >= 0")?;
+        let torque = "must be at most 1e6 N·m (limits::TORQUE_NM)";
+        let speed = "must be at most 1e5 rad/s (limits::SPEED_RAD_S)";
+        check_within(|| f("coulomb_nm"), self.coulomb_nm, self.coulomb_nm >= 0.0, "must be >= 0", limits::TORQUE_NM, torque)?;
+        let above = self.static_nm >= self.coulomb_nm;
+        check_within(|| f("static_nm"), self.static_nm, above, "must be >= coulomb_nm", limits::TORQUE_NM, torque)?;
+        let v = self.stribeck_velocity_rad_s;
+        check_within(|| f("stribeck_velocity_rad_s"), v, v > 0.0, "must be > 0", limits::SPEED_RAD_S, speed)?;
+        let b = self.viscous_nms_rad;
+        let viscous = "must be at most 1e6 N·m·s/rad (limits::VISCOUS_NMS_RAD)";
+        check_within(|| f("viscous_nms_rad"), b, b >= 0.0, "must be >= 0", limits::VISCOUS_NMS_RAD, viscous)?;
         if let Some(vf) = self.viscous_falloff_rad_s {
-            check(|| f("viscous_falloff_rad_s"), vf, vf > 0.0, "must be > 0")?;
+            check_within(|| f("viscous_falloff_rad_s"), vf, vf > 0.0, "must be > 0", limits::SPEED_RAD_S, speed)?;
         }
         Ok(())
     }

@@ -9,7 +9,7 @@ use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
 
 use super::integrator::ArmState;
-use super::params::{check, ParamError};
+use super::params::{check_within, limits, ParamError};
 
 /// Which hardware-like effects are on, and how strong they are.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -30,9 +30,26 @@ pub struct HardwareEffects {
 }
 
 impl HardwareEffects {
-    /// Checks every value against an arm of `dof` joints.
+    /// Checks every value against an arm of `dof` joints, each within its
+    /// [`limits`](super::params::limits): encoder counts 0 (off) or 1 to 1e12 per revolution,
+    /// torque limits up to 1e6 N·m, angle noise up to π rad, velocity noise up to 1e5 rad/s.
     pub fn validate(&self, dof: usize) -> Result<(), ParamError> {
-        for (name, list) in [("encoder_counts_per_rev", &self.encoder_counts_per_rev), ("torque_limit_nm", &self.torque_limit_nm)] {
+        // What is wrong with one entry of each list, if anything (NaN fails every comparison).
+        type Problem = fn(f64) -> Option<&'static str>;
+        let encoder: Problem = |x| match x {
+            _ if x == 0.0 => None,
+            _ if !(x >= 1.0) => Some("must be 0 (off) or at least 1 count per revolution"),
+            _ if !(x <= limits::ENCODER_COUNTS) => Some("must be at most 1e12 counts per revolution (limits::ENCODER_COUNTS)"),
+            _ => None,
+        };
+        let torque: Problem = |x| match x {
+            _ if !(x >= 0.0) => Some("must be >= 0 (0: off)"),
+            _ if !(x <= limits::TORQUE_NM) => Some("must be at most 1e6 N·m (limits::TORQUE_NM)"),
+            _ => None,
+        };
+        for (name, list, problem) in
+            [("encoder_counts_per_rev", &self.encoder_counts_per_rev, encoder), ("torque_limit_nm", &self.torque_limit_nm, torque)]
+        {
             if let Some(v) = list {
                 if v.len() != dof {
                     return Err(ParamError::Invalid {
@@ -42,14 +59,18 @@ impl HardwareEffects {
                     });
                 }
                 for (i, &x) in v.iter().enumerate() {
-                    check(|| format!("{name}[{i}]"), x, x >= 0.0, "must be >= 0 (0: off)")?;
+                    if let Some(why) = problem(x) {
+                        return Err(ParamError::Invalid { name: format!("{name}[{i}]"), value: x, why });
+                    }
                 }
             }
         }
         let q = self.q_noise_std_rad;
-        check(|| "q_noise_std_rad".into(), q, q >= 0.0, "must be >= 0")?;
+        let half_turn = "must be at most π rad (limits::ANGLE_NOISE_RAD)";
+        check_within(|| "q_noise_std_rad".into(), q, q >= 0.0, "must be >= 0", limits::ANGLE_NOISE_RAD, half_turn)?;
         let qd = self.qd_noise_std_rad_s;
-        check(|| "qd_noise_std_rad_s".into(), qd, qd >= 0.0, "must be >= 0")?;
+        let speed = "must be at most 1e5 rad/s (limits::SPEED_RAD_S)";
+        check_within(|| "qd_noise_std_rad_s".into(), qd, qd >= 0.0, "must be >= 0", limits::SPEED_RAD_S, speed)?;
         Ok(())
     }
 

@@ -17,6 +17,6 @@ pub use dynamics::{
 };
 pub use friction::{FrictionBranch, JointFriction};
 pub use hardware::{HardwareEffects, Sensors};
-pub use integrator::{ArmSimulator, ArmState, IntegratorSettings, StepError};
+pub use integrator::{max_substeps, ArmSimulator, ArmState, IntegratorSettings, StepError, MAX_STEP_WORK};
 pub use kinematics::{end_effector_position, end_effector_state, end_effector_velocity, jacobian, jacobian_dot_qd, jacobian_into};
-pub use params::{ArmParams, LinkParams, ParamError};
+pub use params::{check_joint_count, limits, show_number, ArmParams, LinkParams, ParamError, MAX_JOINTS};

@@ -46,12 +46,52 @@ pub struct ArmParams {
     pub base_angle_rad: f64,
 }
 
+/// Largest number of joints an arm may have. The paper's pipeline runs arms of 2 to 8 joints;
+/// the mass matrix is n × n and its factorisation grows as n³ in every RK4 stage, so a step of
+/// a 64-joint arm already costs a thousand times one of a 4-joint arm. 64 is eight times the
+/// largest arm of the pipeline; a configuration or an FMU resource asking for more (a typo, or
+/// a file that is not what it claims) is refused before anything is allocated for it.
+pub const MAX_JOINTS: usize = 64;
+
+/// The largest values that still describe a physical arm, so that a value that parses but
+/// means nothing (`mass_kg = 1e300`) is refused by name instead of overflowing the dynamics to
+/// infinity. Each is far beyond any robot arm, so no real arm is refused.
+pub mod limits {
+    /// Link length and distance to the centre of mass [m] (the longest crane booms are < 100 m).
+    pub const LENGTH_M: f64 = 100.0;
+    /// Link mass [kg] (100 t).
+    pub const MASS_KG: f64 = 1e5;
+    /// Moment of inertia about the centre of mass [kg·m²] (the largest mass at the largest
+    /// length: 1e5 kg × (100 m)²).
+    pub const INERTIA_KGM2: f64 = 1e9;
+    /// Gravitational acceleration [m/s²] (ten times the Earth's).
+    pub const GRAVITY_M_S2: f64 = 100.0;
+    /// Tilt of the base, either way [rad]: one full turn.
+    pub const BASE_ANGLE_RAD: f64 = std::f64::consts::TAU;
+    /// Friction levels and torque limits [N·m].
+    pub const TORQUE_NM: f64 = 1e6;
+    /// Viscous friction coefficient [N·m·s/rad].
+    pub const VISCOUS_NMS_RAD: f64 = 1e6;
+    /// Speeds: Stribeck velocity, viscous fall-off and the velocity noise [rad/s] (about a
+    /// million rpm).
+    pub const SPEED_RAD_S: f64 = 1e5;
+    /// Standard deviation of the angle noise [rad]: half a turn.
+    pub const ANGLE_NOISE_RAD: f64 = std::f64::consts::PI;
+    /// Encoder counts per revolution (0 is off; a 40-bit encoder has 1.1e12).
+    pub const ENCODER_COUNTS: f64 = 1e12;
+    /// Shortest and longest RK4 sub-step [s].
+    pub const INTERNAL_STEP_S: (f64, f64) = (1e-9, 1.0);
+}
+
 /// Why a set of parameters cannot describe an arm.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ParamError {
     /// The arm has no links.
     #[error("the arm needs at least one joint")]
     NoJoints,
+    /// The arm has more joints than [`MAX_JOINTS`].
+    #[error("{0} joints: an arm may have at most {MAX_JOINTS}")]
+    TooManyJoints(usize),
     /// `friction` and `links` differ in length.
     #[error("{links} links but {friction} friction entries: give one per joint")]
     FrictionCount {
@@ -61,7 +101,7 @@ pub enum ParamError {
         friction: usize,
     },
     /// A value is out of its range.
-    #[error("{name} = {value} is invalid: {why}")]
+    #[error("{name} = {} is invalid: {why}", show_number(*.value))]
     Invalid {
         /// Which parameter, e.g. `links[2].mass_kg`.
         name: String,
@@ -72,12 +112,45 @@ pub enum ParamError {
     },
 }
 
+/// `value` for a message: as written for ordinary magnitudes, in exponent form beyond them
+/// (1.7e308 rather than 309 digits).
+pub fn show_number(value: f64) -> String {
+    if value == 0.0 || !value.is_finite() || (1e-4..1e15).contains(&value.abs()) {
+        value.to_string()
+    } else {
+        format!("{value:e}")
+    }
+}
+
 /// Checks that `value` is finite and satisfies `ok`, naming the parameter otherwise.
 pub(crate) fn check(name: impl FnOnce() -> String, value: f64, ok: bool, why: &'static str) -> Result<(), ParamError> {
     if value.is_finite() && ok {
         Ok(())
     } else {
         Err(ParamError::Invalid { name: name(), value, why })
+    }
+}
+
+/// Checks that `value` is finite, satisfies `ok` (`why` says how) and is at most `max` in
+/// magnitude (`beyond` says what that limit is), naming the parameter otherwise.
+pub(crate) fn check_within(
+    name: impl Fn() -> String,
+    value: f64,
+    ok: bool,
+    why: &'static str,
+    max: f64,
+    beyond: &'static str,
+) -> Result<(), ParamError> {
+    check(&name, value, ok, why)?;
+    check(name, value, value.abs() <= max, beyond)
+}
+
+/// Checks the number of joints against [`MAX_JOINTS`].
+pub fn check_joint_count(joints: usize) -> Result<(), ParamError> {
+    match joints {
+        0 => Err(ParamError::NoJoints),
+        n if n > MAX_JOINTS => Err(ParamError::TooManyJoints(n)),
+        _ => Ok(()),
     }
 }
 
@@ -117,25 +190,36 @@ impl ArmParams {
         self.gravity_m_s2 * self.base_angle_rad.sin()
     }
 
-    /// Checks every value; the first problem found is returned.
+    /// Checks every value, each within its [`limits`]; the first problem found is returned.
     pub fn validate(&self) -> Result<(), ParamError> {
-        if self.links.is_empty() {
-            return Err(ParamError::NoJoints);
-        }
+        check_joint_count(self.links.len())?;
         if self.friction.len() != self.links.len() {
             return Err(ParamError::FrictionCount { links: self.links.len(), friction: self.friction.len() });
         }
         for (i, l) in self.links.iter().enumerate() {
-            check(|| format!("links[{i}].length_m"), l.length_m, l.length_m > 0.0, "must be > 0")?;
-            check(|| format!("links[{i}].mass_kg"), l.mass_kg, l.mass_kg > 0.0, "must be > 0")?;
-            check(|| format!("links[{i}].com_m"), l.com_m, true, "must be finite")?;
-            check(|| format!("links[{i}].inertia_kgm2"), l.inertia_kgm2, l.inertia_kgm2 >= 0.0, "must be >= 0")?;
+            let length = "must be at most 100 m (limits::LENGTH_M)";
+            check_within(|| format!("links[{i}].length_m"), l.length_m, l.length_m > 0.0, "must be > 0", limits::LENGTH_M, length)?;
+            let mass = "must be at most 1e5 kg (limits::MASS_KG)";
+            check_within(|| format!("links[{i}].mass_kg"), l.mass_kg, l.mass_kg > 0.0, "must be > 0", limits::MASS_KG, mass)?;
+            check_within(|| format!("links[{i}].com_m"), l.com_m, true, "must be finite", limits::LENGTH_M, length)?;
+            let inertia = "must be at most 1e9 kg·m² (limits::INERTIA_KGM2)";
+            let ok = l.inertia_kgm2 >= 0.0;
+            check_within(|| format!("links[{i}].inertia_kgm2"), l.inertia_kgm2, ok, "must be >= 0", limits::INERTIA_KGM2, inertia)?;
         }
         for (i, f) in self.friction.iter().enumerate() {
             f.validate(i)?;
         }
-        check(|| "gravity_m_s2".into(), self.gravity_m_s2, self.gravity_m_s2 >= 0.0, "must be >= 0")?;
-        check(|| "base_angle_rad".into(), self.base_angle_rad, true, "must be finite")?;
+        let g = self.gravity_m_s2;
+        check_within(
+            || "gravity_m_s2".into(),
+            g,
+            g >= 0.0,
+            "must be >= 0",
+            limits::GRAVITY_M_S2,
+            "must be at most 100 m/s² (limits::GRAVITY_M_S2)",
+        )?;
+        let turn = "must be within one turn, ±2π (limits::BASE_ANGLE_RAD)";
+        check_within(|| "base_angle_rad".into(), self.base_angle_rad, true, "must be finite", limits::BASE_ANGLE_RAD, turn)?;
         Ok(())
     }
 }

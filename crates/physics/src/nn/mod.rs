@@ -10,4 +10,4 @@ pub mod weights;
 pub use encoding::{EncodedNet, InputEncoding};
 pub use lm::{train, EpochInfo, StopReason, TrainReport, TrainSettings, Trained};
 pub use mlp::{MinMaxScaling, Mlp};
-pub use weights::{NetKind, Signal, WeightsError, WeightsFile};
+pub use weights::{read_limits, NetKind, Signal, WeightsError, WeightsFile};

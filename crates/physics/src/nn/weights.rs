@@ -8,12 +8,32 @@ use serde::{Deserialize, Serialize};
 use super::encoding::{EncodedNet, InputEncoding};
 use super::lm::{TrainReport, TrainSettings};
 use super::mlp::{MinMaxScaling, Mlp};
+use crate::arm::show_number;
 
 /// Value of `format` in every weights file.
 pub const FORMAT: &str = "neurarm-weights";
 /// The version this build writes. Version 3 added `kind` and `joint`, version 2 `encoding`;
 /// files of versions 1 and 2 are still read (their kind is [`NetKind::Unspecified`]).
 pub const VERSION: u32 = 3;
+
+/// Limits a weights file must keep to be read, so that a file that parses but holds no
+/// usable net (a billion inputs, a weight of 1e308) is refused by name instead of exhausting
+/// memory or turning every output into infinity. This trainer makes nets of at most
+/// [`MAX_HIDDEN`](super::lm::MAX_HIDDEN) neurons and [`MAX_WEIGHTS`](super::lm::MAX_WEIGHTS)
+/// weights; the limits leave room for nets trained elsewhere.
+pub mod read_limits {
+    /// Inputs and outputs of a net, each.
+    pub const SIGNALS: usize = 1024;
+    /// Hidden neurons.
+    pub const HIDDEN: usize = 10_000;
+    /// Weights and biases in all (one evaluation is about this many multiply-adds).
+    pub const WEIGHTS: usize = 1_000_000;
+    /// Magnitude of a weight or bias. The hidden layer sees inputs scaled to [-1, 1] and
+    /// saturates (tanh) beyond a few units, so a trained net's weights stay many orders below.
+    pub const WEIGHT: f64 = 1e8;
+    /// Magnitude of a scaling bound (the range of a signal in its own unit).
+    pub const SCALING: f64 = 1e15;
+}
 
 /// What a net computes, so that a compensator can check it is given the right nets in the
 /// right places.
@@ -221,6 +241,20 @@ impl WeightsFile {
         if h == 0 || k == 0 {
             return Err(format!("empty network: {h} hidden neurons, {k} outputs"));
         }
+        if self.inputs.len() > read_limits::SIGNALS || k > read_limits::SIGNALS {
+            return Err(format!(
+                "{} inputs and {k} outputs: a net may have at most {} of each (read_limits::SIGNALS)",
+                self.inputs.len(),
+                read_limits::SIGNALS
+            ));
+        }
+        if h > read_limits::HIDDEN {
+            return Err(format!("{h} hidden neurons: a net may have at most {} (read_limits::HIDDEN)", read_limits::HIDDEN));
+        }
+        let weights = h * (n + 1) + k * (h + 1);
+        if weights > read_limits::WEIGHTS {
+            return Err(format!("{weights} weights and biases: a net may have at most {} (read_limits::WEIGHTS)", read_limits::WEIGHTS));
+        }
         let shape = |name: &str, rows: &Vec<Vec<f64>>, r: usize, c: usize| -> Result<(), String> {
             if rows.len() != r {
                 return Err(format!("{name} has {} rows, expected {r}", rows.len()));
@@ -245,8 +279,14 @@ impl WeightsFile {
         }
         let all = self.iw.iter().flatten().chain(&self.b1).chain(self.lw.iter().flatten()).chain(&self.b2);
         let scalings = [&self.input_scaling, &self.output_scaling].into_iter().flat_map(|s| s.min.iter().chain(&s.max));
-        if let Some(v) = all.chain(scalings).find(|v| !v.is_finite()) {
+        if let Some(v) = all.clone().chain(scalings.clone()).find(|v| !v.is_finite()) {
             return Err(format!("a weight or scaling value is {v}, not a finite number"));
+        }
+        if let Some(v) = all.copied().find(|v| !(v.abs() <= read_limits::WEIGHT)) {
+            return Err(format!("a weight or bias is {}: beyond ±1e8 (read_limits::WEIGHT) no trained net has them", show_number(v)));
+        }
+        if let Some(v) = scalings.copied().find(|v| !(v.abs() <= read_limits::SCALING)) {
+            return Err(format!("a scaling bound is {}: beyond ±1e15 (read_limits::SCALING)", show_number(v)));
         }
         let mlp = Mlp {
             iw: DMatrix::from_fn(h, n, |j, i| self.iw[j][i]),
@@ -269,7 +309,8 @@ impl WeightsFile {
     /// Reads and checks a weights file.
     pub fn read(path: &Path) -> Result<Self, WeightsError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| WeightsError::Io { path: shown.clone(), message: e.to_string() })?;
+        let text = crate::text_file::read_text(path, crate::text_file::MAX_WEIGHTS_BYTES)
+            .map_err(|e| WeightsError::Io { path: shown.clone(), message: e.to_string() })?;
         Self::from_json(&text, &shown)
     }
 
