@@ -12,11 +12,11 @@
 //! * a failure of the model itself (invalid parameters at initialization, a step that cannot
 //!   be taken) returns `Error` and puts the instance in the error state, where the standard
 //!   allows only getting values, restoring an FMU state, `fmi2Reset` and `fmi2FreeInstance`.
-//!   A model call that leaves a Real variable NaN or infinite is such a failure, named by the
+//!   A model call that leaves a Real output or local NaN or infinite is such a failure, named by the
 //!   variable; and `fmi2GetReal` never returns `fmi2OK` with a number that is not finite.
 
 use crate::codec::{Put, Reader, StateError};
-use crate::description::{BaseType, Kind, ModelDescription, SetPhase, LOG_CATEGORIES};
+use crate::description::{BaseType, Causality, Kind, ModelDescription, SetPhase, LOG_CATEGORIES};
 use crate::model::{Discard, Model, Values};
 
 /// `fmi2Status`.
@@ -168,9 +168,57 @@ pub struct Instance {
     log: LogSink,
     debug_logging: bool,
     categories: Vec<bool>,
-    /// Variable index by base type (in [`BaseType`] order) and value reference; value
+    /// Variable entry by base type (in [`BaseType`] order) and value reference; value
     /// references are dense per type, so a vector beats a hash map on the hot path.
-    lookup: [Vec<Option<usize>>; 4],
+    lookup: [Vec<Entry>; 4],
+    /// Value references of the Real variables a model call computes (outputs and locals): the
+    /// ones checked for NaN and infinities after every call. Inputs and parameters change only
+    /// through checked sets, start values and restored states.
+    computed_reals: Vec<u32>,
+}
+
+/// What the hot get/set paths need of a variable, precomputed: its index in the description
+/// and in which phases `fmi2Set*` may change it.
+#[derive(Clone, Copy)]
+struct Entry {
+    /// Index in the description's variables; [`Entry::NONE`] for an unused value reference.
+    index: u32,
+    /// Bit `phase_bit(p)` set when the variable is settable in [`SetPhase`] `p`.
+    settable: u8,
+}
+
+impl Entry {
+    const NONE: Entry = Entry { index: u32::MAX, settable: 0 };
+
+    fn index(self) -> Option<usize> {
+        (self.index != u32::MAX).then_some(self.index as usize)
+    }
+}
+
+fn phase_bit(phase: SetPhase) -> u8 {
+    match phase {
+        SetPhase::Instantiated => 1,
+        SetPhase::Initialization => 2,
+        SetPhase::Running => 4,
+    }
+}
+
+/// Whether every number is finite; no early exit, so the loop vectorises (this runs on every
+/// step over all Real variables).
+fn all_finite(numbers: &[f64]) -> bool {
+    numbers.iter().fold(0u64, |any, &v| any | not_finite_bit(v)) == 0
+}
+
+/// Whether `numbers[i]` is finite for every `i` in `at`.
+fn all_finite_at(numbers: &[f64], at: &[u32]) -> bool {
+    at.iter().fold(0u64, |any, &i| any | not_finite_bit(numbers[i as usize])) == 0
+}
+
+/// 1 for an infinity or NaN, else 0: such a double has all exponent bits set. An OR of these
+/// vectorises where `is_finite` with an early exit does not.
+fn not_finite_bit(v: f64) -> u64 {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    u64::from(v.to_bits() & EXPONENT == EXPONENT)
 }
 
 /// Magic bytes at the start of a serialized FMU state.
@@ -207,18 +255,28 @@ impl Instance {
             return Err(InstantiateError::WrongGuid { given: guid.to_owned(), expected });
         }
         let description = model.description();
-        let mut lookup: [Vec<Option<usize>>; 4] = Default::default();
+        let mut lookup: [Vec<Entry>; 4] = Default::default();
         for (i, v) in description.variables.iter().enumerate() {
             let slot = &mut lookup[v.base_type().slot()];
             let vr = v.value_reference as usize;
             if slot.len() <= vr {
-                slot.resize(vr + 1, None);
+                slot.resize(vr + 1, Entry::NONE);
             }
-            slot[vr] = Some(i);
+            let settable = [SetPhase::Instantiated, SetPhase::Initialization, SetPhase::Running]
+                .into_iter()
+                .filter(|&p| v.settable_in(p))
+                .fold(0, |bits, p| bits | phase_bit(p));
+            slot[vr] = Entry { index: u32::try_from(i).expect("fewer than 2^32 variables"), settable };
         }
+        let computed_reals = description
+            .variables
+            .iter()
+            .filter(|v| v.base_type() == BaseType::Real && matches!(v.causality, Causality::Output | Causality::Local))
+            .map(|v| v.value_reference)
+            .collect();
         let values = Values::start(description);
         if let Some(vr) = values.reals.iter().position(|v| !v.is_finite()) {
-            let name = lookup[BaseType::Real.slot()].get(vr).copied().flatten().map(|i| description.variables[i].name.clone());
+            let name = lookup[BaseType::Real.slot()].get(vr).and_then(|e| e.index()).map(|i| description.variables[i].name.clone());
             return Err(InstantiateError::NonFiniteStart { name: name.unwrap_or_else(|| format!("#{vr}")), value: values.reals[vr] });
         }
         Ok(Self {
@@ -238,6 +296,7 @@ impl Instance {
             debug_logging,
             categories: LOG_CATEGORIES.iter().map(|_| debug_logging).collect(),
             lookup,
+            computed_reals,
         })
     }
 
@@ -394,7 +453,7 @@ impl Instance {
     }
 
     fn index_of(&self, base: BaseType, vr: u32) -> Option<usize> {
-        self.lookup[base.slot()].get(vr as usize).copied().flatten()
+        self.lookup[base.slot()].get(vr as usize).and_then(|e| e.index())
     }
 
     fn resolve(&self, function: &str, vr: u32, base: BaseType) -> Result<usize, Status> {
@@ -441,9 +500,12 @@ impl Instance {
         if let Err(s) = self.refresh(function) {
             return s;
         }
-        for &vr in vrs {
-            if let Err(s) = self.resolve(function, vr, base) {
-                return s;
+        let table = &self.lookup[base.slot()];
+        if !vrs.iter().all(|&vr| table.get(vr as usize).is_some_and(|e| e.index != u32::MAX)) {
+            for &vr in vrs {
+                if let Err(s) = self.resolve(function, vr, base) {
+                    return s;
+                }
             }
         }
         for (o, &vr) in out.iter_mut().zip(vrs) {
@@ -456,6 +518,7 @@ impl Instance {
     /// refused by name, never returned with `fmi2OK`.
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
         match self.get("fmi2GetReal", BaseType::Real, vrs, out, |v, i| v.reals[i]) {
+            Status::Ok if all_finite(out) => Status::Ok,
             Status::Ok => match vrs.iter().find(|&&vr| !self.values.reals[vr as usize].is_finite()) {
                 Some(&vr) => self.error(&format!(
                     "fmi2GetReal: '{}' is {}, not a finite number: the model call that computed it failed",
@@ -489,6 +552,12 @@ impl Instance {
             Phase::InitializationMode => SetPhase::Initialization,
             _ => SetPhase::Running,
         };
+        let bit = phase_bit(phase);
+        let table = &self.lookup[base.slot()];
+        if vrs.iter().all(|&vr| table.get(vr as usize).is_some_and(|e| e.settable & bit != 0)) {
+            return Ok(());
+        }
+        // The slow path names the first reference that fails.
         let variables = &self.model.description().variables;
         for &vr in vrs {
             let var = &variables[self.resolve(function, vr, base)?];
@@ -507,7 +576,8 @@ impl Instance {
         if let Err(s) = self.check_settable("fmi2SetReal", BaseType::Real, vrs) {
             return s;
         }
-        if let Some((vr, v)) = vrs.iter().zip(values).find(|(_, v)| !v.is_finite()) {
+        if !all_finite(values) {
+            let (vr, v) = vrs.iter().zip(values).find(|(_, v)| !v.is_finite()).expect("one is not finite");
             let index = self.index_of(BaseType::Real, *vr).expect("checked above");
             let name = &self.model.description().variables[index].name;
             return self.error(&format!("fmi2SetReal: {v} for '{name}' is not a finite number; nothing was set"));
@@ -654,10 +724,14 @@ impl Instance {
         }
     }
 
-    /// After a model call: every Real variable must be a finite number; the first that is not
-    /// is named in the returned reason.
+    /// After a model call: every Real output and local must be a finite number; the first that
+    /// is not is named in the returned reason.
     fn non_finite_real(&self) -> Option<String> {
-        let vr = self.values.reals.iter().position(|v| !v.is_finite())?;
+        let reals = &self.values.reals;
+        if all_finite_at(reals, &self.computed_reals) {
+            return None;
+        }
+        let vr = self.computed_reals.iter().map(|&vr| vr as usize).find(|&vr| !reals[vr].is_finite())?;
         Some(format!("the model computed {} for '{}', not a finite number", show(self.values.reals[vr]), self.real_name(vr as u32)))
     }
 
