@@ -1,14 +1,16 @@
 //! The `IdealCompensator` FMU: the true friction and gravity torques of an arm, with the ports
 //! of every compensator ([`CompensatorPorts`]): "perfect compensation". Friction at exactly
-//! zero velocity is 0 (the true value there is any torque up to breakaway).
+//! zero velocity is 0 (the true value there is any torque up to breakaway). It has the arm's
+//! tunable drift parameters ([`DriftPorts`]), so it stays the true model of an arm that drifts
+//! when a host changes both alike.
 
 use std::path::Path;
 
 use fmi2_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
-use neurarm_physics::arm::{gravity_torques_into, ArmData, ArmParams};
+use neurarm_physics::arm::{gravity_torques_into, ArmData, ArmParams, OperatingChange};
 use serde::{Deserialize, Serialize};
 
-use crate::ports::{CompensatorPorts, Parts};
+use crate::ports::{drift_error, CompensatorPorts, DriftPorts, Parts};
 use crate::{describe, BuildError, ModelKind};
 
 /// Spec of an ideal compensator.
@@ -30,14 +32,22 @@ impl ModelKind for IdealCompensatorSpec {
 
     fn equations_html(&self) -> &'static str {
         "<p><code>tau_friction_i = f_i(qd_i)</code> (the arm's own friction law, 0 at rest), \
-<code>tau_gravity = g(q)</code> (the arm's gravity torques), <code>tau_comp_i</code> their enabled sum.</p>"
+<code>tau_gravity = g(q)</code> (the arm's gravity torques), <code>tau_comp_i</code> their enabled sum; \
+the arm changed by the drift parameters (coulomb_scale_i, viscous_scale_i, payload_mass, payload_offset) as \
+the PlanarArm FMU changes it.</p>"
     }
 }
 
 /// The ideal compensator behind the FMU.
 pub struct IdealCompensatorModel {
     description: ModelDescription,
+    /// The arm as configured.
+    base: ArmParams,
+    /// The arm changed by the drift parameters: the one compensated.
     arm: ArmParams,
+    drift: DriftPorts,
+    change: OperatingChange,
+    change_applied: bool,
     ports: CompensatorPorts,
     data: ArmData,
     angles: Vec<f64>,
@@ -51,9 +61,21 @@ impl IdealCompensatorModel {
         let n = arm.dof();
         let mut b = TableBuilder::new();
         let ports = CompensatorPorts::declare(&mut b, n, Parts { friction: true, gravity: true, source: "true" }, enable);
+        let drift = DriftPorts::declare(&mut b, n);
         let text = format!("Ideal compensator: the true friction and gravity torques of a {n}-joint planar arm (neurarm)");
         let description = describe(identifier, text, b.finish())?;
-        Ok(Self { description, data: ArmData::new(&arm), arm, ports, angles: vec![0.0; n], gravity: vec![0.0; n] })
+        Ok(Self {
+            description,
+            data: ArmData::new(&arm),
+            base: arm.clone(),
+            arm,
+            drift,
+            change: OperatingChange::none(n),
+            change_applied: true,
+            ports,
+            angles: vec![0.0; n],
+            gravity: vec![0.0; n],
+        })
     }
 }
 
@@ -63,6 +85,13 @@ impl StaticModel for IdealCompensatorModel {
     }
 
     fn compute(&mut self, values: &mut Values, _time: f64) -> Result<(), ModelError> {
+        if self.drift.read(values, &mut self.change) || !self.change_applied {
+            self.change_applied = false;
+            self.change
+                .apply_into(&self.base, &mut self.arm)
+                .map_err(|e| ModelError::msg(format!("the arm cannot take the change: {}", drift_error(&e))))?;
+            self.change_applied = true;
+        }
         let p = &self.ports;
         let use_friction = values[p.enable_friction];
         let use_gravity = values[p.enable_gravity];

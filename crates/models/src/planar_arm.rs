@@ -5,15 +5,21 @@
 //! measured angles and velocities `q_meas_i`, `qd_meas_i` (equal to the true ones unless
 //! hardware-like effects are on). Parameters: every field of [`ArmConfig`], one table below
 //! ([`JOINT_PARAMETERS`], [`ARM_PARAMETERS`]), plus the initial state `q0_i`, `qd0_i`.
+//! Tunable, so a host can change them while the arm runs ([`DriftPorts`]): `coulomb_scale_i`,
+//! `viscous_scale_i` (factors on joint i's friction) and a payload at the tip, `payload_mass`,
+//! `payload_offset`; the next step runs with the changed arm.
 
 use std::path::Path;
 
 use fmi2_export::codec::{Put, Reader, StateError};
 use fmi2_export::{Causality, IntegerVar, Model, ModelDescription, ModelError, RealVar, TableBuilder, Unit, Values, Variability};
-use neurarm_physics::arm::{end_effector_state, ArmSimulator, ArmState, FrictionBranch, ParamError, Sensors, StepError};
+use neurarm_physics::arm::{
+    end_effector_state, ArmParams, ArmSimulator, ArmState, FrictionBranch, OperatingChange, ParamError, Sensors, StepError,
+};
 use neurarm_physics::config::ArmConfig;
 use serde::{Deserialize, Serialize};
 
+use crate::ports::{drift_error, DriftPorts};
 use crate::units::*;
 use crate::{describe, BuildError, ModelKind};
 
@@ -262,6 +268,7 @@ struct Layout {
     qd0: Vec<RealVar>,
     arm_params: Vec<RealVar>,
     seed: IntegerVar,
+    drift: DriftPorts,
 }
 
 /// The FMU's variable table and layout for `config`, an arm of n joints.
@@ -306,8 +313,9 @@ fn table(identifier: &str, config: &ArmConfig, initial: &ArmState) -> Result<(Mo
     });
     let arm_params = ARM_PARAMETERS.iter().map(|p| b.parameter(p.name, p.unit, (p.get)(config), p.description)).collect();
     let seed = b.integer("noise_seed", Causality::Parameter, Variability::Fixed, Some(seed), "Seed of the measurement noise");
+    let drift = DriftPorts::declare(&mut b, n);
     let description = describe(identifier, format!("Planar {n}-R arm with joint friction (neurarm)"), b.finish())?;
-    Ok((description, Layout { tau, q, qd, ee, q_meas, qd_meas, joint_params, q0, qd0, arm_params, seed }))
+    Ok((description, Layout { tau, q, qd, ee, q_meas, qd_meas, joint_params, q0, qd0, arm_params, seed, drift }))
 }
 
 /// The arm model behind the FMU.
@@ -321,6 +329,11 @@ pub struct PlanarArmModel {
     tau: Vec<f64>,
     q_meas: Vec<f64>,
     qd_meas: Vec<f64>,
+    /// The drift the simulator runs with (tunable parameters), and whether it was applied.
+    change: OperatingChange,
+    change_applied: bool,
+    /// The configured arm changed by `change`: scratch, so a ramp allocates nothing.
+    changed: ArmParams,
 }
 
 impl PlanarArmModel {
@@ -336,7 +349,11 @@ impl PlanarArmModel {
             )));
         }
         let (description, layout) = table(identifier, &config, &initial)?;
+        let changed = config.arm.clone();
         Ok(Self {
+            change: OperatingChange::none(n),
+            change_applied: true,
+            changed,
             description,
             layout,
             template: config,
@@ -387,7 +404,26 @@ impl PlanarArmModel {
         let (sim, sensors) = config.build().map_err(ArmError::Parameter)?;
         self.template = config;
         self.running = Some((sim, sensors));
+        self.change = OperatingChange::none(self.state.q.len());
+        self.change_applied = true;
         Ok(initial)
+    }
+
+    /// Follows the tunable drift parameters: when they changed since the last step (or were
+    /// refused then), the simulator gets the configured arm changed by them. Allocates nothing.
+    fn follow_drift(&mut self, values: &Values) -> Result<(), ModelError> {
+        let changed = self.layout.drift.read(values, &mut self.change);
+        if !changed && self.change_applied {
+            return Ok(());
+        }
+        let (sim, _) = self.running.as_mut().ok_or(ArmError::NotInitialized)?;
+        self.change_applied = false;
+        self.change
+            .apply_into(&self.template.arm, &mut self.changed)
+            .map_err(|e| ModelError::msg(format!("the arm cannot take the change: {}", drift_error(&e))))?;
+        sim.set_params(&self.changed).map_err(ArmError::Parameter)?;
+        self.change_applied = true;
+        Ok(())
     }
 }
 
@@ -398,6 +434,7 @@ impl Model for PlanarArmModel {
 
     fn initialize(&mut self, values: &mut Values, _start_time: f64) -> Result<(), ModelError> {
         self.state = self.start(values)?;
+        self.follow_drift(values)?;
         if let Some((index, &value)) = self.state.q.iter().chain(&self.state.qd).enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(ArmError::InitialState { index, value }.into());
         }
@@ -407,6 +444,7 @@ impl Model for PlanarArmModel {
 
     fn do_step(&mut self, values: &mut Values, _time: f64, step: f64) -> Result<(), ModelError> {
         values.read_reals(&self.layout.tau, &mut self.tau);
+        self.follow_drift(values)?;
         let (sim, _) = self.running.as_mut().ok_or(ArmError::NotInitialized)?;
         sim.step(&mut self.state, &self.tau, step).map_err(ArmError::from)?;
         if let Some(&v) = self.state.q.iter().chain(&self.state.qd).find(|v| !v.is_finite()) {
@@ -441,6 +479,7 @@ impl Model for PlanarArmModel {
             0 => self.running = None,
             1 => {
                 self.start(values)?;
+                self.follow_drift(values)?;
                 if let Some((_, sensors)) = self.running.as_mut() {
                     sensors.set_stream_position(position);
                 }
@@ -465,4 +504,8 @@ integrated with fixed-step RK4, in equal sub-steps no longer than <code>internal
 communication step; torques are held constant over a communication step. Outputs: \
 <code>x = Σ l<sub>i</sub> cos θ<sub>i</sub></code>, <code>y = Σ l<sub>i</sub> sin θ<sub>i</sub></code>, \
 their time derivatives, and measured angles and velocities (quantised to the encoder resolution and \
-with Gaussian noise when those parameters are non-zero).</p>";
+with Gaussian noise when those parameters are non-zero).</p>\
+<p>Drift while running (tunable): joint i's Coulomb and static levels are multiplied by \
+<code>coulomb_scale_i</code> and its viscous coefficient by <code>viscous_scale_i</code>; a point mass \
+<code>payload_mass</code> at <code>payload_offset</code> beyond the tip joins the last link (mass, centre of \
+mass and inertia combined). A change takes effect from the next step.</p>";

@@ -8,8 +8,10 @@
 
 use fmi2_export::{BooleanVar, RealVar, TableBuilder, Values};
 
+use neurarm_physics::arm::{OperatingChange, ParamError};
+
 use crate::per_joint;
-use crate::units::{NEWTON_METRE, RADIAN, RADIAN_PER_SECOND};
+use crate::units::{KILOGRAM, METRE, NEWTON_METRE, RADIAN, RADIAN_PER_SECOND};
 
 /// The variables of a compensator.
 #[derive(Clone, Debug)]
@@ -120,4 +122,84 @@ impl ControllerInputs {
         });
         Self { q, qd, tau_comp }
     }
+}
+
+/// The tunable parameters of an arm that drifts while it works (see
+/// [`OperatingChange`]): per joint `coulomb_scale_i`, `viscous_scale_i` [-] (1: as
+/// identified), and `payload_mass` [kg], `payload_offset` [m] at the tip. The arm and the
+/// ideal compensator share them, so "perfect compensation" can follow the same change.
+#[derive(Clone, Debug)]
+pub struct DriftPorts {
+    /// Factor on joint i's Coulomb (and static) friction.
+    pub coulomb_scale: Vec<RealVar>,
+    /// Factor on joint i's viscous friction.
+    pub viscous_scale: Vec<RealVar>,
+    /// Payload mass.
+    pub payload_mass: RealVar,
+    /// Payload position beyond the tip.
+    pub payload_offset: RealVar,
+}
+
+impl DriftPorts {
+    /// Declares them in `b` for `joints` joints, all starting at no change.
+    pub fn declare(b: &mut TableBuilder, joints: usize) -> Self {
+        let coulomb_scale = per_joint(b, joints, |b, i| {
+            b.tunable(
+                format!("coulomb_scale_{}", i + 1),
+                None,
+                1.0,
+                format!("Factor on the Coulomb and static friction of joint {}, both directions (1: as configured)", i + 1),
+            )
+        });
+        let viscous_scale = per_joint(b, joints, |b, i| {
+            b.tunable(
+                format!("viscous_scale_{}", i + 1),
+                None,
+                1.0,
+                format!("Factor on the viscous friction of joint {}, both directions (1: as configured)", i + 1),
+            )
+        });
+        let payload_mass = b.tunable("payload_mass", KILOGRAM, 0.0, "Point mass held at the tip (0: none)");
+        let payload_offset =
+            b.tunable("payload_offset", METRE, 0.0, "Position of the payload beyond the tip along the last link (0: at the tip)");
+        Self { coulomb_scale, viscous_scale, payload_mass, payload_offset }
+    }
+
+    /// Reads the change in `values` into `change` (sized for the joints); returns whether it
+    /// differs from what `change` held. Allocates nothing.
+    pub fn read(&self, values: &Values, change: &mut OperatingChange) -> bool {
+        let mut changed = false;
+        let mut take = |slot: &mut f64, value: f64| {
+            // Compared by bits, so a NaN set by mistake is seen (and refused) once.
+            if slot.to_bits() != value.to_bits() {
+                *slot = value;
+                changed = true;
+            }
+        };
+        for (slot, &v) in change.coulomb_scale.iter_mut().zip(&self.coulomb_scale) {
+            take(slot, values[v]);
+        }
+        for (slot, &v) in change.viscous_scale.iter_mut().zip(&self.viscous_scale) {
+            take(slot, values[v]);
+        }
+        take(&mut change.payload_mass_kg, values[self.payload_mass]);
+        take(&mut change.payload_offset_m, values[self.payload_offset]);
+        changed
+    }
+}
+
+/// A refusal of an [`OperatingChange`] in the FMU's variable names: `coulomb_scale[1]` is
+/// `coulomb_scale_2`, `payload_mass_kg` is `payload_mass`.
+pub fn drift_error(e: &ParamError) -> String {
+    let text = e.to_string();
+    for what in ["coulomb_scale", "viscous_scale"] {
+        if let Some(rest) = text.strip_prefix(&format!("{what}[")) {
+            if let Some((index, tail)) = rest.split_once(']') {
+                if let Ok(i) = index.parse::<usize>() {
+                    return format!("{what}_{}{tail}", i + 1);
+                }
+            }
+        }
+    }
+    text.replacen("payload_mass_kg", "payload_mass", 1).replacen("payload_offset_m", "payload_offset", 1)
 }

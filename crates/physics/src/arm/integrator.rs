@@ -183,6 +183,29 @@ impl ArmSimulator {
         Ok(())
     }
 
+    /// Replaces the arm's parameters between steps (a drifting or loaded arm, see
+    /// [`crate::arm::OperatingChange`]) by a copy of `params`, reusing the storage: no
+    /// allocation. Refused, leaving the arm as it was, when `params` is invalid or has another
+    /// joint count (the scratch space is sized by it).
+    pub fn set_params(&mut self, params: &ArmParams) -> Result<(), ParamError> {
+        params.validate()?;
+        if params.dof() != self.dof() {
+            return Err(ParamError::Invalid {
+                name: "links (length)".into(),
+                value: params.dof() as f64,
+                why: "must keep the simulator's joint count",
+            });
+        }
+        self.params.copy_from(params);
+        for (mode, f) in self.modes.iter_mut().zip(&self.params.friction) {
+            // A joint whose friction became continuous must not keep a sliding direction.
+            if !f.is_discontinuous() {
+                *mode = Mode::Continuous;
+            }
+        }
+        Ok(())
+    }
+
     /// The arm's parameters.
     pub fn params(&self) -> &ArmParams {
         &self.params

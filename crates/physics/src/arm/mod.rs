@@ -3,6 +3,7 @@
 //!
 //! Plain functions over plain data: nothing here knows about FMI, files or the command line.
 
+pub mod drift;
 pub mod dynamics;
 pub mod friction;
 pub mod hardware;
@@ -10,6 +11,7 @@ pub mod integrator;
 pub mod kinematics;
 pub mod params;
 
+pub use drift::{OperatingChange, MAX_FRICTION_SCALE};
 pub use dynamics::{
     coriolis_centrifugal, coriolis_centrifugal_into, coriolis_matrix, coriolis_matrix_into, gravity_torques, gravity_torques_into,
     inverse_dynamics, inverse_dynamics_into, inverse_dynamics_rnea, inverse_dynamics_rnea_into, kinetic_energy, kinetic_energy_with,

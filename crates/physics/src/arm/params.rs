@@ -155,6 +155,15 @@ pub fn check_joint_count(joints: usize) -> Result<(), ParamError> {
 }
 
 impl ArmParams {
+    /// Makes `self` a copy of `other`, reusing its storage: no allocation when the joint
+    /// counts match (the derived `clone_from` would clone afresh).
+    pub fn copy_from(&mut self, other: &ArmParams) {
+        self.links.clone_from(&other.links);
+        self.friction.clone_from(&other.friction);
+        self.gravity_m_s2 = other.gravity_m_s2;
+        self.base_angle_rad = other.base_angle_rad;
+    }
+
     /// The project's default 4-link arm (DESIGN.md): 0.25 m uniform links of 2.0, 1.6, 1.2 and
     /// 0.8 kg, g = 9.81 m/s², horizontal plane (no gravity torque), and the default geared-arm
     /// Coulomb + viscous friction of [`JointFriction::default_for_joint`].
