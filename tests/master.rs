@@ -181,3 +181,73 @@ fn bad_system_files_are_refused_with_the_reason() {
         SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\nspeed = 3\n[simulation]\nstop = 1\nstep = 1\n", "s.toml").unwrap_err();
     assert!(e.contains("speed"), "{e}");
 }
+
+/// A gain k·u feeding an integrator, u and k changed only by events: u ramps from 0 to 1
+/// over [1, 2] s, k steps from 1 to 2 at 3 s. With values held over each step the integral
+/// is the left Riemann sum of k·u: h² Σ j (j < 100) over the ramp, then 1 and 2 s·(k u).
+#[test]
+fn events_set_and_ramp_tunable_parameters_and_free_inputs() {
+    let b = blocks();
+    let text = format!(
+        r#"
+[[fmu]]
+name = "gain"
+path = "{gain}"
+[[fmu]]
+name = "int"
+path = "{int}"
+[[connection]]
+from = "gain.y"
+to = "int.u"
+[simulation]
+stop = 4.0
+step = 0.01
+record = ["int.y", "gain.u", "gain.k"]
+[[event]]
+time = 3.0
+set = {{ "gain.k" = 2 }}
+[[event]]
+time = 1.0
+until = 2.0
+set = {{ "gain.u" = 1.0 }}
+"#,
+        gain = b.gain.display(),
+        int = b.integrator.display()
+    );
+    let spec = SystemSpec::from_toml(&text, "events.toml").unwrap();
+    assert_eq!(SystemSpec::from_toml(&spec.to_toml().unwrap(), "again").unwrap(), spec, "events round-trip through TOML");
+    let outcome = run(&spec, Path::new("."), None).unwrap();
+    assert!(outcome.error.is_none(), "{:?}", outcome.error);
+    let at = |t: f64| outcome.rows.iter().find(|r| (r[0] - t).abs() < 1e-9).unwrap().clone();
+    assert_eq!(at(1.0)[2], 0.0, "the ramp starts from the value at its start");
+    assert!((at(1.5)[2] - 0.5).abs() < 1e-12 && at(2.5)[2] == 1.0, "{:?} {:?}", at(1.5), at(2.5));
+    assert_eq!((at(2.99)[3], at(3.0)[3]), (1.0, 2.0), "the step change at its time");
+    let expected = 1e-4 * 4950.0 + 1.0 + 2.0;
+    let last = outcome.rows.last().unwrap();
+    assert!((last[0] - 4.0).abs() < 1e-12 && (last[1] - expected).abs() < 1e-9, "y(4) = {} vs {expected}", last[1]);
+}
+
+#[test]
+fn events_on_what_cannot_change_while_running_are_refused_before_the_run() {
+    let b = blocks();
+    let mut s = System::new();
+    s.add_fmu("gain", &b.gain).unwrap().add_fmu("int", &b.integrator).unwrap();
+    s.connect("gain.y", "int.u").unwrap();
+    let event = |time: f64, until: Option<f64>, name: &str, value: Value| fmi2_cosim::EventSpec {
+        time,
+        until,
+        set: [(name.to_owned(), value)].into(),
+    };
+    for (e, wanted) in [
+        (event(1.0, None, "int.y0", Value::Real(2.0)), "only a tunable parameter can change while running"),
+        (event(1.0, None, "int.u", Value::Real(2.0)), "this input is connected"),
+        (event(1.0, None, "int.y", Value::Real(2.0)), "only tunable parameters and unconnected inputs"),
+        (event(1.0, None, "gain.kk", Value::Real(2.0)), "kk"),
+        (event(1.0, Some(0.5), "gain.k", Value::Real(2.0)), "must end at a finite time after it"),
+        (event(1.0, None, "gain.k", Value::Boolean(true)), "gain"),
+    ] {
+        let mut sim = s.clone().initialize(0.0, 0.1, Algorithm::GaussSeidel, &[]).unwrap();
+        let err = sim.schedule(&[e]).unwrap_err().to_string();
+        assert!(err.contains("event 1") && err.contains(wanted), "{err}");
+    }
+}

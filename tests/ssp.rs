@@ -42,6 +42,7 @@ fn loop_spec(integrator: &str) -> SystemSpec {
             record_every: 1,
             on_discard: fmi2_cosim::OnDiscard::Stop,
         },
+        event: Vec::new(),
     }
 }
 

@@ -348,6 +348,7 @@ pub(crate) fn closed_loop(
             record_every: 1,
             on_discard: fmi2_cosim::OnDiscard::Stop,
         },
+        event: Vec::new(),
     }
 }
 
@@ -361,6 +362,7 @@ pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
     run.record_every(sim.record_every);
     // The paper's loops never expect a unit to stop early: a discarded step is a failure.
     run.on_discard(fmi2_cosim::OnDiscard::Error);
+    run.schedule(&spec.event).map_err(master)?;
     let outcome = run.run_until(sim.stop);
     let recorded = LoopRun { columns: run.columns(), rows: run.take_rows() };
     if let Some((t, column, value)) = recorded.instability() {

@@ -73,5 +73,5 @@ pub use error::{DiscardedStep, MasterError};
 pub use interface::{BaseType, Causality, EnumerationInfo, Initial, Interface, Variability, VariableInfo};
 pub use recording::{run, RunOutcome};
 pub use simulation::{Handle, RunEnd, Simulation};
-pub use spec::{Algorithm, ConnectionSpec, FmuEntry, OnDiscard, SimulationSpec, SystemSpec, Value};
+pub use spec::{Algorithm, ConnectionSpec, EventSpec, FmuEntry, OnDiscard, SimulationSpec, SystemSpec, Value};
 pub use system::{expand_connection, Link, Setting, System, UnitPlan};

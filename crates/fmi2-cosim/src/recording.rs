@@ -111,6 +111,7 @@ pub fn run(spec: &SystemSpec, base: &Path, interrupt: Option<Arc<AtomicBool>>) -
     let mut sim = system.initialize(s.start, s.step, s.algorithm, &s.record)?;
     sim.record_every(s.record_every);
     sim.on_discard(s.on_discard);
+    sim.schedule(&spec.event)?;
     if let Some(flag) = interrupt {
         sim.interrupt_on(flag);
     }

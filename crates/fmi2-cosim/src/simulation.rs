@@ -38,10 +38,11 @@ use fmi::fmi2::Fmi2Error;
 
 use crate::capture;
 use crate::error::{DiscardedStep, MasterError};
+use crate::interface::Variability;
 use crate::interface::{BaseType, Causality};
 use crate::recording::Recorder;
 use crate::schedule::Schedule;
-use crate::spec::{Algorithm, OnDiscard, Value};
+use crate::spec::{Algorithm, EventSpec, OnDiscard, Value};
 use crate::system::{check_value, split_name, System};
 use crate::unit::{SharedBinaries, Unit};
 
@@ -92,6 +93,24 @@ pub struct Simulation {
     ended: Option<MasterError>,
     interrupt: Option<Arc<AtomicBool>>,
     notices: Vec<String>,
+    /// Scheduled changes, in time order ([`Simulation::schedule`]).
+    events: Vec<Scheduled>,
+    /// The communication point the events were last applied at.
+    events_applied_at: Option<f64>,
+}
+
+/// One variable of an [`EventSpec`], resolved and checked.
+#[derive(Clone, Debug)]
+struct Scheduled {
+    time: f64,
+    until: Option<f64>,
+    unit: usize,
+    variable: String,
+    value_reference: u32,
+    value: Value,
+    /// A ramp's value at its start, read when it starts.
+    from: Option<f64>,
+    done: bool,
 }
 
 /// A resolved Real variable of a running simulation.
@@ -130,6 +149,8 @@ impl System {
             ended: None,
             interrupt: None,
             notices: Vec::new(),
+            events: Vec::new(),
+            events_applied_at: None,
         };
         sim.start_up(start)?;
         Ok(sim)
@@ -307,6 +328,122 @@ impl Simulation {
         &self.notices
     }
 
+    /// Schedules changes while running (see [`EventSpec`] for what they do). Each variable is
+    /// checked now: it must exist, be a tunable parameter or an input no connection drives,
+    /// take the value's type, and be Real for a ramp. Events due at the current point (the
+    /// start) are applied before the next step; the row already recorded there shows the
+    /// values from initialization. Every later row shows the values after the events due at
+    /// its time, those the next step uses.
+    pub fn schedule(&mut self, events: &[EventSpec]) -> Result<(), MasterError> {
+        let mut added = Vec::new();
+        for (k, event) in events.iter().enumerate() {
+            let at = |e: MasterError| {
+                let mut e = e;
+                e.message = format!("event {} (t = {} s): {}", k + 1, event.time, e.message);
+                e
+            };
+            event.check().map_err(|m| at(MasterError::new(m)))?;
+            for (full, value) in &event.set {
+                let (u, v) = split_name(full).map_err(at)?;
+                let unit = self.system.unit_index(u).map_err(at)?;
+                let plan = &self.system.units()[unit];
+                let info = plan.variable(v).map_err(at)?;
+                let fail = |m: &str| at(MasterError::new(m).unit(u).variable(v));
+                let changeable = match info.causality {
+                    Causality::Input => !self.system.is_connected(unit, info.value_reference, info.base),
+                    Causality::Parameter => info.variability == Variability::Tunable,
+                    _ => false,
+                };
+                if !changeable {
+                    return Err(fail(match info.causality {
+                        Causality::Input => "this input is connected; the connection sets it",
+                        Causality::Parameter => "only a tunable parameter can change while running; this one is fixed",
+                        _ => "only tunable parameters and unconnected inputs can change while running",
+                    }));
+                }
+                check_value(&plan.interface, info, value).map_err(|m| fail(&m))?;
+                if event.until.is_some() && info.base != BaseType::Real {
+                    return Err(fail("only a Real variable can be ramped"));
+                }
+                added.push(Scheduled {
+                    time: event.time,
+                    until: event.until,
+                    unit,
+                    variable: v.to_owned(),
+                    value_reference: info.value_reference,
+                    value: value.clone(),
+                    from: None,
+                    done: false,
+                });
+            }
+        }
+        self.events.extend(added);
+        // Stable: equal times keep the order they were given in.
+        self.events.sort_by(|a, b| a.time.total_cmp(&b.time));
+        Ok(())
+    }
+
+    /// Applies the scheduled changes due at the current communication point and passes their
+    /// effect on.
+    fn apply_events(&mut self) -> Result<(), MasterError> {
+        let t = self.time;
+        if self.events.is_empty() || self.events_applied_at == Some(t) {
+            return Ok(());
+        }
+        self.events_applied_at = Some(t);
+        let due = t + STEP_TOLERANCE * self.step;
+        let mut touched = false;
+        for k in 0..self.events.len() {
+            let e = &self.events[k];
+            if e.time > due {
+                break;
+            }
+            if e.done {
+                continue;
+            }
+            let unit = e.unit;
+            match e.until {
+                None => {
+                    let (variable, value) = (e.variable.clone(), e.value.clone());
+                    self.set_value(unit, &variable, &value).map_err(|e| e.at(t))?;
+                    self.events[k].done = true;
+                }
+                Some(until) => {
+                    let vr = [e.value_reference];
+                    let target = match e.value {
+                        Value::Real(x) => x,
+                        Value::Integer(i) => i as f64,
+                        _ => unreachable!("checked when scheduled: a ramp is of a Real"),
+                    };
+                    let u = &mut self.units[unit];
+                    let from = match e.from {
+                        Some(x) => x,
+                        None => {
+                            let mut x = [0.0];
+                            let mark = capture::mark();
+                            u.instance.get_real(&vr, &mut x).map_err(|err| u.fail("fmi2GetReal", err, mark, Some(t)))?;
+                            x[0]
+                        }
+                    };
+                    let end = due >= until;
+                    let x = if end { target } else { from + (target - from) * ((t - e.time) / (until - e.time)).clamp(0.0, 1.0) };
+                    let mark = capture::mark();
+                    u.instance
+                        .set_real(&vr, &[x])
+                        .map_err(|err| u.fail("fmi2SetReal", err, mark, Some(t)).variable(&self.events[k].variable))?;
+                    self.events[k].from = Some(from);
+                    self.events[k].done = end;
+                }
+            }
+            self.schedule.touch_unit(unit);
+            touched = true;
+        }
+        if touched {
+            self.resolve_dirty(Some(t), None)?;
+        }
+        Ok(())
+    }
+
     /// One communication step from the current time. After a unit discarded a step the
     /// system cannot go on, and every further call is an error.
     pub fn step(&mut self) -> Result<(), MasterError> {
@@ -314,6 +451,8 @@ impl Simulation {
         self.steps_taken += 1;
         // Times from the step count, so long runs do not accumulate rounding.
         self.time = self.anchor + self.steps_taken as f64 * self.step;
+        // The row of a communication point shows the values the next step uses.
+        self.apply_events()?;
         if self.steps_taken % self.recorder.every == 0 {
             self.recorder.record(&mut self.units, self.time)?;
         }
@@ -328,6 +467,8 @@ impl Simulation {
             e.message = format!("the run has ended and cannot step on: {}", e.message);
             return Err(e);
         }
+        // Events due at the start time (the later ones were applied on arrival).
+        self.apply_events()?;
         let t = self.time;
         let result = match self.algorithm {
             Algorithm::GaussSeidel => (|| {
@@ -410,6 +551,7 @@ impl Simulation {
                     self.time = stop;
                     self.anchor = stop;
                     self.steps_taken = 0;
+                    self.apply_events()?;
                     self.recorder.record(&mut self.units, self.time)
                 })
             };

@@ -75,6 +75,15 @@ pub enum Value {
 /// stop = 10.0
 /// step = 0.001
 /// record = ["arm.x", "arm.y"]
+///
+/// [[event]]                       # a step change while running
+/// time = 4.0
+/// set = { "arm.payload_mass" = 0.3 }
+///
+/// [[event]]                       # a ramp: linear from the value at `time` to `set` at `until`
+/// time = 0.0
+/// until = 8.0
+/// set = { "arm.viscous_scale_1" = 0.6 }
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -86,6 +95,48 @@ pub struct SystemSpec {
     pub connection: Vec<ConnectionSpec>,
     /// Time span, step, algorithm, recording.
     pub simulation: SimulationSpec,
+    /// Changes while running: tunable parameters or unconnected inputs set at given times,
+    /// or ramped over an interval.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub event: Vec<EventSpec>,
+}
+
+/// A change of variables while the system runs (`[[event]]` in a system file).
+///
+/// A step change (no `until`) sets each variable to its value at the first communication
+/// point at or after `time`; the steps from there on use it. A ramp (with `until`) moves
+/// each Real variable linearly from the value it has at `time` to the value given, reached at
+/// `until`: at every communication point t in between it is set to the line's value at t.
+/// Only tunable parameters and inputs no connection drives can change; both are checked
+/// before the run starts. Events are applied in time order, and in file order at equal times.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EventSpec {
+    /// When the change happens, or the ramp starts [s].
+    pub time: f64,
+    /// When the ramp ends [s]; absent for a step change.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub until: Option<f64>,
+    /// "unit.variable" → the value set (the ramp's end value).
+    pub set: BTreeMap<String, Value>,
+}
+
+impl EventSpec {
+    /// Checks the times: finite, and for a ramp `until` after `time`.
+    pub fn check(&self) -> Result<(), String> {
+        if !self.time.is_finite() {
+            return Err(format!("an event's time must be finite, not {}", self.time));
+        }
+        match self.until {
+            Some(until) if !(until.is_finite() && until > self.time) => {
+                Err(format!("the ramp from t = {} s must end at a finite time after it, not until = {until}", self.time))
+            }
+            _ if self.set.is_empty() => {
+                Err(format!("the event at t = {} s sets nothing: give set = {{ \"unit.variable\" = value }}", self.time))
+            }
+            _ => Ok(()),
+        }
+    }
 }
 
 /// One FMU of a system.
@@ -160,6 +211,9 @@ impl SystemSpec {
     pub fn from_toml(text: &str, origin: &str) -> Result<Self, String> {
         let spec: Self = toml::from_str(text).map_err(|e| format!("{origin}: {}", e.to_string().trim_end()))?;
         spec.simulation.check().map_err(|e| format!("{origin}: {e}"))?;
+        for (k, event) in spec.event.iter().enumerate() {
+            event.check().map_err(|e| format!("{origin}: event {}: {e}", k + 1))?;
+        }
         Ok(spec)
     }
 

@@ -68,8 +68,14 @@ pub const ANNOTATION_TYPE: &str = "fmi2-cosim.simulation";
 ///
 /// `base` is the folder the spec's relative FMU paths are taken from. The FMUs are not
 /// loaded, only their `modelDescription.xml` read, and the system is checked as
-/// [`System::from_spec`] checks it. See [`write_system`].
+/// [`System::from_spec`] checks it. See [`write_system`]. A spec with events is refused: SSP
+/// 1.0 cannot hold them.
 pub fn write_ssp(spec: &SystemSpec, base: &Path, out: &Path) -> Result<(), MasterError> {
+    if !spec.event.is_empty() {
+        return Err(MasterError::new(
+            "SSP 1.0 has no place for events ([[event]]): write the system without them, and give the changes to the engine that runs it",
+        ));
+    }
     write_system(&System::from_spec(spec, base)?, &spec.simulation, out)
 }
 

@@ -233,6 +233,7 @@ fn a_raised_interrupt_flag_ends_the_run_with_the_rows_so_far() {
             record_every: 1,
             on_discard: OnDiscard::Stop,
         },
+        event: Vec::new(),
     };
     let flag = Arc::new(AtomicBool::new(false));
     let raiser = {
