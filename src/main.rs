@@ -12,7 +12,8 @@ use neurarm::output::{describe, Destination};
 use neurarm::simulate::{simulate, TorqueInput};
 use neurarm::table::{write_atomic, write_text_atomic, NumericTable};
 use neurarm_models::{
-    FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
+    AdaptationLaw, AdaptiveCompensatorSpec, FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec,
+    PlanarArmSpec, TaskSpaceControllerSpec,
 };
 use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
@@ -422,6 +423,11 @@ enum Export {
     /// gravity torques of the arm in `-c` (default: the built-in arm), with the same ports;
     /// `--friction` and `--gravity`, without files, choose the parts switched on (both if
     /// neither is given).
+    ///
+    /// With `--adaptive`, the adaptive compensator (`AdaptiveCompensator`): the same nets as
+    /// its start, whose output layers keep learning from the controller's learning signal
+    /// `s_i` (inputs `s_i`; parameters adapt, gain_friction, gain_gravity, leakage,
+    /// bound_friction, bound_gravity).
     Compensator {
         /// Friction net of each joint (1 input: velocity, 1 output: torque), in joint order;
         /// with `--ideal`, no files: switch the true friction on.
@@ -432,8 +438,11 @@ enum Export {
         #[arg(long, num_args = 0..=1)]
         gravity: Option<Option<PathBuf>>,
         /// The arm's true friction and gravity instead of nets.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "adaptive")]
         ideal: bool,
+        /// Nets whose output layers adapt while running.
+        #[arg(long)]
+        adaptive: bool,
         /// With `--ideal`: the arm configuration (TOML); the built-in arm if omitted.
         #[arg(long, short = 'c', requires = "ideal")]
         config: Option<PathBuf>,
@@ -882,7 +891,7 @@ fn run(cli: Cli) -> Result<()> {
             write_atomic(&output, &header, rows.into_iter()).with_context(|| format!("writing {}", describe(&output)))?;
             eprintln!("wrote {} rows to {}", table.rows(), describe(&output));
         }
-        Command::Export(Export::Compensator { friction, gravity, ideal: true, config, name, output }) => {
+        Command::Export(Export::Compensator { friction, gravity, ideal: true, adaptive: _, config, name, output }) => {
             if friction.as_ref().is_some_and(|f| !f.is_empty()) || gravity.as_ref().is_some_and(|g| g.is_some()) {
                 bail!(
                     "--ideal takes no weights files: it computes the arm's true torques (--friction and --gravity alone choose the parts)"
@@ -898,10 +907,10 @@ fn run(cli: Cli) -> Result<()> {
             let model = ModelSpec::IdealCompensator(IdealCompensatorSpec { arm, enable_friction, enable_gravity });
             export(FmuSpec { identifier, model }, &[], &output, n)?;
         }
-        Command::Export(Export::Compensator { friction, gravity, ideal: false, config: _, name, output }) => {
+        Command::Export(Export::Compensator { friction, gravity, ideal: false, adaptive, config: _, name, output }) => {
             let friction = friction.unwrap_or_default();
             let gravity = gravity.flatten();
-            let identifier = identifier_for(name, &output, "NnCompensator");
+            let identifier = identifier_for(name, &output, if adaptive { "AdaptiveCompensator" } else { "NnCompensator" });
             if friction.is_empty() && gravity.is_none() {
                 bail!("give --friction nets, a --gravity net, or both (or --ideal for the arm's true torques)");
             }
@@ -923,13 +932,25 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(g) = &gravity {
                 sources.push(("gravity.json".into(), g.clone()));
             }
-            let model = ModelSpec::NnCompensator(NnCompensatorSpec {
+            let spec = NnCompensatorSpec {
                 joints,
                 friction: (1..=friction.len()).map(|i| format!("friction_{i}.json")).collect(),
                 gravity: gravity.as_ref().map(|_| "gravity.json".to_owned()),
                 enable_friction: !friction.is_empty(),
                 enable_gravity: gravity.is_some(),
-            });
+            };
+            let model = if adaptive {
+                ModelSpec::AdaptiveCompensator(AdaptiveCompensatorSpec {
+                    joints: spec.joints,
+                    friction: spec.friction,
+                    gravity: spec.gravity,
+                    enable_friction: spec.enable_friction,
+                    enable_gravity: spec.enable_gravity,
+                    law: AdaptationLaw::default(),
+                })
+            } else {
+                ModelSpec::NnCompensator(spec)
+            };
             export(FmuSpec { identifier, model }, &sources, &output, joints)?;
         }
         Command::Export(Export::Controller(Controller::TaskSpace { config, kp, kd, null_damping, centre, scale, name, output })) => {

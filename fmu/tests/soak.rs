@@ -130,6 +130,18 @@ fn models() -> Vec<Model> {
             1.0,
         ),
         (
+            "AdaptiveCompensator".to_owned(),
+            ModelSpec::AdaptiveCompensator(AdaptiveCompensatorSpec {
+                joints: 4,
+                friction: (1..=4).map(|j| format!("friction_{j}.json")).collect(),
+                gravity: Some("gravity.json".into()),
+                enable_friction: true,
+                enable_gravity: true,
+                law: AdaptationLaw::default(),
+            }),
+            1.0,
+        ),
+        (
             "IdealCompensator".to_owned(),
             ModelSpec::IdealCompensator(IdealCompensatorSpec {
                 arm: arm.clone().with_base_angle(1.0),

@@ -265,6 +265,21 @@ pub fn specs() -> Vec<(&'static str, FmuSpec, Vec<(String, String)>)> {
                     enable_gravity: true,
                 }),
             ),
+            net_texts.clone(),
+        ),
+        (
+            "AdaptiveCompensator",
+            spec(
+                "AdaptiveCompensator",
+                ModelSpec::AdaptiveCompensator(AdaptiveCompensatorSpec {
+                    joints: 4,
+                    friction: (1..=4).map(|j| format!("friction_{j}.json")).collect(),
+                    gravity: Some("gravity.json".into()),
+                    enable_friction: true,
+                    enable_gravity: true,
+                    law: AdaptationLaw::default(),
+                }),
+            ),
             net_texts,
         ),
         (

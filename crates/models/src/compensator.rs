@@ -34,26 +34,9 @@ pub struct NnCompensatorSpec {
 
 impl ModelKind for NnCompensatorSpec {
     fn build(&self, identifier: &str, resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
-        let dir = resources.ok_or(BuildError::NoResources)?;
-        neurarm_physics::arm::check_joint_count(self.joints)?;
-        if self.friction.len() > self.joints {
-            return Err(BuildError::Spec(format!("{} friction nets for {} joints", self.friction.len(), self.joints)));
-        }
-        let mut crc = crc32fast::Hasher::new();
-        let mut load = |name: &str| -> Result<WeightsFile, BuildError> {
-            let path = crate::resource_file(dir, name)?;
-            let text = neurarm_physics::text_file::read_text(&path, neurarm_physics::text_file::MAX_WEIGHTS_BYTES)
-                .map_err(|e| BuildError::Weights { path: path.clone(), message: e.to_string() })?;
-            crc.update(text.as_bytes());
-            WeightsFile::from_json(&text, &path.display().to_string()).map_err(|e| BuildError::Spec(e.to_string()))
-        };
-        let friction = self.friction.iter().map(|f| load(f)).collect::<Result<Vec<_>, _>>()?;
-        let gravity = self.gravity.as_deref().map(&mut load).transpose()?;
-        // Named by their resource files, so a refusal says which file is wrong.
-        let named: Vec<(&str, &WeightsFile)> = self.friction.iter().map(String::as_str).zip(&friction).collect();
-        check_compensator_nets(&named, self.gravity.as_deref().zip(gravity.as_ref())).map_err(BuildError::Spec)?;
+        let (friction, gravity, crc) = load_nets(resources, self.joints, &self.friction, self.gravity.as_deref())?;
         let enable = (self.enable_friction, self.enable_gravity);
-        Ok(Box::new(NnCompensatorModel::new(identifier, self.joints, &friction, gravity.as_ref(), enable, crc.finalize())?))
+        Ok(Box::new(NnCompensatorModel::new(identifier, self.joints, &friction, gravity.as_ref(), enable, crc)?))
     }
 
     fn resource_files(&self) -> Vec<String> {
@@ -63,6 +46,36 @@ impl ModelKind for NnCompensatorSpec {
     fn equations_html(&self) -> &'static str {
         EQUATIONS_HTML
     }
+}
+
+/// Reads a compensator's weights files (`friction` in joint order, `gravity`) from
+/// `resources` and checks that they fit together ([`check_compensator_nets`]), naming a bad
+/// file; returns the nets and the CRC-32 of their text, for the model description.
+pub(crate) fn load_nets(
+    resources: Option<&Path>,
+    joints: usize,
+    friction: &[String],
+    gravity: Option<&str>,
+) -> Result<(Vec<WeightsFile>, Option<WeightsFile>, u32), BuildError> {
+    let dir = resources.ok_or(BuildError::NoResources)?;
+    neurarm_physics::arm::check_joint_count(joints)?;
+    if friction.len() > joints {
+        return Err(BuildError::Spec(format!("{} friction nets for {joints} joints", friction.len())));
+    }
+    let mut crc = crc32fast::Hasher::new();
+    let mut load = |name: &str| -> Result<WeightsFile, BuildError> {
+        let path = crate::resource_file(dir, name)?;
+        let text = neurarm_physics::text_file::read_text(&path, neurarm_physics::text_file::MAX_WEIGHTS_BYTES)
+            .map_err(|e| BuildError::Weights { path: path.clone(), message: e.to_string() })?;
+        crc.update(text.as_bytes());
+        WeightsFile::from_json(&text, &path.display().to_string()).map_err(|e| BuildError::Spec(e.to_string()))
+    };
+    let friction_nets = friction.iter().map(|f| load(f)).collect::<Result<Vec<_>, _>>()?;
+    let gravity_net = gravity.map(&mut load).transpose()?;
+    // Named by their resource files, so a refusal says which file is wrong.
+    let named: Vec<(&str, &WeightsFile)> = friction.iter().map(String::as_str).zip(&friction_nets).collect();
+    check_compensator_nets(&named, gravity.zip(gravity_net.as_ref())).map_err(BuildError::Spec)?;
+    Ok((friction_nets, gravity_net, crc.finalize()))
 }
 
 /// Checks that the nets fit together as a compensator and returns its joint count: each
@@ -150,13 +163,7 @@ fn check_units(name: &str, what: &str, signals: &[Signal], expected: &str) -> Re
 /// The compensator behind the FMU.
 pub struct NnCompensatorModel {
     description: ModelDescription,
-    ports: CompensatorPorts,
-    friction: Vec<EncodedNet>,
-    gravity: Option<EncodedNet>,
-    features: Vec<f64>,
-    hidden: Vec<f64>,
-    x: Vec<f64>,
-    y: Vec<f64>,
+    core: NetCompensator,
 }
 
 fn check_signals(file: &WeightsFile, what: &str, n_in: usize, n_out: usize) -> Result<EncodedNet, BuildError> {
@@ -171,19 +178,28 @@ fn check_signals(file: &WeightsFile, what: &str, n_in: usize, n_out: usize) -> R
     Ok(net)
 }
 
-impl NnCompensatorModel {
-    /// A compensator for `joints` joints from one friction net per joint (1 input: the joint's
-    /// velocity; 1 output: its friction torque), or none, and a gravity net (all angles in,
-    /// all gravity torques out), or none; at least one part is needed. `fingerprint` (of the
-    /// weights) goes into the description, so other weights give another GUID.
-    pub fn new(
-        identifier: &str,
+/// The nets of a compensator, its ports and scratch space: what the NN and the adaptive
+/// compensator share.
+pub(crate) struct NetCompensator {
+    pub(crate) ports: CompensatorPorts,
+    pub(crate) friction: Vec<EncodedNet>,
+    pub(crate) gravity: Option<EncodedNet>,
+    pub(crate) features: Vec<f64>,
+    pub(crate) hidden: Vec<f64>,
+    pub(crate) x: Vec<f64>,
+    y: Vec<f64>,
+}
+
+impl NetCompensator {
+    /// Checks the nets (see [`NnCompensatorModel::new`]) and declares the compensator's ports
+    /// in `b`; returns it and the name of its parts ("friction and gravity", …).
+    pub(crate) fn new(
+        b: &mut TableBuilder,
         joints: usize,
         friction: &[WeightsFile],
         gravity: Option<&WeightsFile>,
         enable: (bool, bool),
-        fingerprint: u32,
-    ) -> Result<Self, BuildError> {
+    ) -> Result<(Self, &'static str), BuildError> {
         neurarm_physics::arm::check_joint_count(joints)?;
         let names: Vec<String> = (1..=friction.len()).map(|i| format!("friction net {i}")).collect();
         let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(friction).collect();
@@ -206,51 +222,51 @@ impl NnCompensatorModel {
             })
             .collect::<Result<_, _>>()?;
         let gravity = gravity.map(|g| check_signals(g, "gravity net", joints, joints)).transpose()?;
-        let mut b = TableBuilder::new();
         let parts = Parts { friction: !friction.is_empty(), gravity: gravity.is_some(), source: "learned" };
-        let ports = CompensatorPorts::declare(&mut b, joints, parts, enable);
+        let ports = CompensatorPorts::declare(b, joints, parts, enable);
         let which = match (parts.friction, parts.gravity) {
             (true, true) => "friction and gravity",
             (true, false) => "friction",
             _ => "gravity",
         };
-        let text = format!("NN compensator of {which} torques for {joints} joints (neurarm; weights crc32 {fingerprint:08x})");
-        let description = describe(identifier, text, b.finish())?;
         let widest = friction.iter().chain(&gravity).map(EncodedNet::hidden).max().unwrap_or(1);
         let features = vec![0.0; gravity.as_ref().map_or(1, EncodedNet::features)];
         let (x, y) = (vec![0.0; joints], vec![0.0; joints]);
-        Ok(Self { description, ports, friction, gravity, features, hidden: vec![0.0; widest], x, y })
-    }
-}
-
-impl StaticModel for NnCompensatorModel {
-    fn description(&self) -> &ModelDescription {
-        &self.description
+        Ok((Self { ports, friction, gravity, features, hidden: vec![0.0; widest], x, y }, which))
     }
 
-    fn compute(&mut self, values: &mut Values, _time: f64) -> Result<(), ModelError> {
+    /// The gravity net's input for the angles in `values`, into `self.x`: the angles as they
+    /// come for a periodic net; for a raw one (the paper's) each angle brought into the turn
+    /// the net was trained on, [min, min + 2π) of its training data, as gravity is
+    /// 2π-periodic in every revolute angle and a raw net is not (angles outside that range
+    /// are not extrapolated).
+    pub(crate) fn gravity_input(&mut self, values: &Values) {
+        let Some(g) = &self.gravity else { return };
         let p = &self.ports;
-        let use_friction = values[p.enable_friction] && !self.friction.is_empty();
-        let use_gravity = values[p.enable_gravity] && self.gravity.is_some();
-        match (&self.gravity, use_gravity) {
-            (Some(g), true) => {
-                if g.encoding.is_periodic() {
-                    for i in 0..p.joints() {
-                        self.x[i] = values[p.q[i]];
-                    }
-                } else {
-                    // Gravity is 2π-periodic in every revolute angle and a raw net is not:
-                    // bring each angle into the turn the net was trained on, [min, min + 2π)
-                    // of its training data, so angles outside that range are not extrapolated.
-                    for i in 0..p.joints() {
-                        let low = g.mlp.input_scaling.min[i];
-                        self.x[i] = low + (values[p.q[i]] - low).rem_euclid(std::f64::consts::TAU);
-                    }
-                }
-                g.evaluate_into(&self.x, &mut self.features, &mut self.hidden[..g.hidden()], &mut self.y);
+        if g.encoding.is_periodic() {
+            for i in 0..p.joints() {
+                self.x[i] = values[p.q[i]];
             }
-            _ => self.y.fill(0.0),
+        } else {
+            for i in 0..p.joints() {
+                let low = g.mlp.input_scaling.min[i];
+                self.x[i] = low + (values[p.q[i]] - low).rem_euclid(std::f64::consts::TAU);
+            }
         }
+    }
+
+    /// Writes the outputs for the inputs and switches in `values`.
+    pub(crate) fn compute(&mut self, values: &mut Values) {
+        let use_friction = values[self.ports.enable_friction] && !self.friction.is_empty();
+        let use_gravity = values[self.ports.enable_gravity] && self.gravity.is_some();
+        if use_gravity {
+            self.gravity_input(values);
+            let g = self.gravity.as_ref().expect("checked");
+            g.evaluate_into(&self.x, &mut self.features, &mut self.hidden[..g.hidden()], &mut self.y);
+        } else {
+            self.y.fill(0.0);
+        }
+        let p = &self.ports;
         for i in 0..p.joints() {
             let friction = if use_friction {
                 let mut out = [0.0];
@@ -262,6 +278,37 @@ impl StaticModel for NnCompensatorModel {
             };
             p.write(values, i, friction, self.y[i]);
         }
+    }
+}
+
+impl NnCompensatorModel {
+    /// A compensator for `joints` joints from one friction net per joint (1 input: the joint's
+    /// velocity; 1 output: its friction torque), or none, and a gravity net (all angles in,
+    /// all gravity torques out), or none; at least one part is needed. `fingerprint` (of the
+    /// weights) goes into the description, so other weights give another GUID.
+    pub fn new(
+        identifier: &str,
+        joints: usize,
+        friction: &[WeightsFile],
+        gravity: Option<&WeightsFile>,
+        enable: (bool, bool),
+        fingerprint: u32,
+    ) -> Result<Self, BuildError> {
+        let mut b = TableBuilder::new();
+        let (core, which) = NetCompensator::new(&mut b, joints, friction, gravity, enable)?;
+        let text = format!("NN compensator of {which} torques for {joints} joints (neurarm; weights crc32 {fingerprint:08x})");
+        let description = describe(identifier, text, b.finish())?;
+        Ok(Self { description, core })
+    }
+}
+
+impl StaticModel for NnCompensatorModel {
+    fn description(&self) -> &ModelDescription {
+        &self.description
+    }
+
+    fn compute(&mut self, values: &mut Values, _time: f64) -> Result<(), ModelError> {
+        self.core.compute(values);
         Ok(())
     }
 }

@@ -3,6 +3,8 @@
 //! with gravity compensation as `tau_comp`. The target q_d is the built-in
 //! [`JOINT_SEQUENCE`] (with q̇_d = 0) or, with `use_sequence` false, the inputs `q_ref_i`,
 //! `qd_ref_i`. Static in its inputs (direct feedthrough); the sequence depends on time.
+//! Outputs `s_i = (q̇_d,i − q̇_i) + λ (q_d,i − q_i)`, the learning signal an adaptive
+//! compensator takes.
 
 use std::path::Path;
 
@@ -10,8 +12,11 @@ use fmi2_export::{BooleanVar, Model, ModelDescription, ModelError, RealVar, Stat
 use serde::{Deserialize, Serialize};
 
 use crate::ports::ControllerInputs;
-use crate::units::{NEWTON_METRE, NEWTON_METRE_PER_RADIAN, NEWTON_METRE_SECOND_PER_RADIAN, RADIAN, RADIAN_PER_SECOND};
+use crate::units::{NEWTON_METRE, NEWTON_METRE_PER_RADIAN, NEWTON_METRE_SECOND_PER_RADIAN, PER_SECOND, RADIAN, RADIAN_PER_SECOND};
 use crate::{describe, per_joint, BuildError, ModelKind};
+
+/// Default λ of the learning signal [1/s].
+pub const DEFAULT_JOINT_LAMBDA: f64 = 5.0;
 
 /// Spec of a joint controller.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -70,6 +75,8 @@ pub struct JointControllerModel {
     qd_ref: Vec<RealVar>,
     tau: Vec<RealVar>,
     target: Vec<RealVar>,
+    signal: Vec<RealVar>,
+    lambda: RealVar,
     kp: Vec<RealVar>,
     kd: Vec<RealVar>,
     use_sequence: BooleanVar,
@@ -100,6 +107,16 @@ impl JointControllerModel {
         let target = per_joint(&mut b, joints, |b, i| {
             b.output(format!("q_target_{}", i + 1), RADIAN, format!("Active target angle of joint {}", i + 1), &[q_ref[i]])
         });
+        let signal = per_joint(&mut b, joints, |b, i| {
+            let deps = [q[i], qd[i], q_ref[i], qd_ref[i]];
+            b.output(
+                format!("s_{}", i + 1),
+                RADIAN_PER_SECOND,
+                format!("Learning signal of joint {} for an adaptive compensator: (qd_d − qd) + lambda (q_d − q)", i + 1),
+                &deps,
+            )
+        });
+        let lambda = b.tunable("lambda", PER_SECOND, DEFAULT_JOINT_LAMBDA, "Weight of the position error in the learning signal, lambda");
         let kp = per_joint(&mut b, joints, |b, i| {
             b.tunable(format!("kp_{}", i + 1), NEWTON_METRE_PER_RADIAN, kp, format!("Position gain of joint {}", i + 1))
         });
@@ -115,7 +132,7 @@ impl JointControllerModel {
             b.tunable_flag("use_sequence", use_sequence, "Follow the built-in target sequence (true) or the q_ref/qd_ref inputs (false)");
         let text = format!("Joint-space P(D) controller with a compensation input for {joints} joints (neurarm)");
         let description = describe(identifier, text, b.finish())?;
-        Ok(Self { description, q, qd, tau_comp, q_ref, qd_ref, tau, target, kp, kd, use_sequence })
+        Ok(Self { description, q, qd, tau_comp, q_ref, qd_ref, tau, target, signal, lambda, kp, kd, use_sequence })
     }
 }
 
@@ -134,6 +151,7 @@ impl StaticModel for JointControllerModel {
                 + values[self.kd[i]] * (target_velocity - values[self.qd[i]]);
             values[self.tau[i]] = tau;
             values[self.target[i]] = target;
+            values[self.signal[i]] = (target_velocity - values[self.qd[i]]) + values[self.lambda] * (target - values[self.q[i]]);
         }
         Ok(())
     }

@@ -10,6 +10,7 @@
 //! model, and the [`ModelKind`] entry that builds it, names its resource files and documents
 //! its equations. [`ModelSpec`] lists the kinds.
 
+pub mod adaptive;
 pub mod compensator;
 pub mod ideal;
 pub mod joint;
@@ -24,6 +25,7 @@ use std::path::{Path, PathBuf};
 use fmi2_export::{DefaultExperiment, DescriptionError, Model, ModelDescription, ModelError, RealVar, TableBuilder, Variable};
 use serde::{Deserialize, Serialize};
 
+pub use adaptive::{AdaptationLaw, AdaptiveCompensatorSpec};
 pub use compensator::{check_compensator_nets, NnCompensatorSpec};
 pub use ideal::IdealCompensatorSpec;
 pub use joint::JointControllerSpec;
@@ -83,6 +85,8 @@ pub enum ModelSpec {
     PlanarArm(PlanarArmSpec),
     /// The NN compensator; weights files live beside the spec in `resources/`.
     NnCompensator(NnCompensatorSpec),
+    /// The NN compensator whose output layers keep learning; weights files as the NN one's.
+    AdaptiveCompensator(AdaptiveCompensatorSpec),
     /// Task-space computed-torque controller with the paper's reference.
     TaskSpaceController(TaskSpaceControllerSpec),
     /// Joint-space P(D) controller with a compensation input.
@@ -101,6 +105,7 @@ impl ModelSpec {
         match self {
             ModelSpec::PlanarArm(s) => s,
             ModelSpec::NnCompensator(s) => s,
+            ModelSpec::AdaptiveCompensator(s) => s,
             ModelSpec::TaskSpaceController(s) => s,
             ModelSpec::JointController(s) => s,
             ModelSpec::IdealCompensator(s) => s,

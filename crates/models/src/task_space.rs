@@ -4,19 +4,26 @@
 //! `u = J⁺ (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J⁺J) q̇`,
 //! `τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + τ_comp`, with Ĥ, Ĉ, ĝ from the controller's model of the
 //! arm (friction is left to `tau_comp`). Static in its inputs (direct feedthrough); the
-//! reference depends on time.
+//! reference depends on time. Outputs `s_i`, the learning signal an adaptive compensator
+//! takes: `s = Ĥ⁻¹ Jᵀ (ė + λ e)` with e = x_d − x ([`task_learning_signal_into`]).
 
 use std::path::Path;
 
 use fmi2_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use nalgebra::Vector2;
 use neurarm_physics::arm::{end_effector_position, ArmParams};
-use neurarm_physics::control::{scaled_reference, task_space_torque_into, TaskReference, TaskSpaceData, TaskSpaceGains};
+use neurarm_physics::control::{
+    scaled_reference, task_learning_signal_into, task_space_torque_into, LearningSignalData, TaskReference, TaskSpaceData, TaskSpaceGains,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::ports::ControllerInputs;
 use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED};
 use crate::{describe, per_joint, BuildError, ModelKind};
+
+/// Default λ of the learning signal [1/s]: the position error's weight, between 0 and the
+/// paper's K_d = 160 (the Lyapunov argument needs 0 < λ < K_d).
+pub const DEFAULT_TASK_LAMBDA: f64 = 20.0;
 
 /// Spec of a task-space controller.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -70,7 +77,10 @@ pub struct TaskSpaceControllerModel {
     null_damping: RealVar,
     centre: [RealVar; 2],
     scale: RealVar,
+    signal: Vec<RealVar>,
+    lambda: RealVar,
     data: TaskSpaceData,
+    learning: LearningSignalData,
     /// Inputs as read: angles, velocities, compensation; and the torques.
     buf: [Vec<f64>; 4],
 }
@@ -105,6 +115,15 @@ impl TaskSpaceControllerModel {
         let tau = per_joint(&mut b, n, |b, i| {
             b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all)
         });
+        let q_and_qd: Vec<RealVar> = q.iter().chain(&qd).copied().collect();
+        let signal = per_joint(&mut b, n, |b, i| {
+            b.output(
+                format!("s_{}", i + 1),
+                None,
+                format!("Learning signal of joint {} for an adaptive compensator: (H⁻¹ Jᵀ (ė + λ e))_{} [1/(kg·s)]", i + 1, i + 1),
+                &q_and_qd,
+            )
+        });
         let reference = [b.output("x_ref", METRE, "Reference x_d(t)", &[]), b.output("y_ref", METRE, "Reference y_d(t)", &[])];
         let error = [b.output("error_x", METRE, "Tracking error x_d − x", &q), b.output("error_y", METRE, "Tracking error y_d − y", &q)];
         let kp = b.tunable("kp", PER_SECOND_SQUARED, gains.kp, "Position gain K_p");
@@ -115,6 +134,12 @@ impl TaskSpaceControllerModel {
             gains.null_damping,
             "Null-space damping k_null: self-motion decays as -k_null (I - J#J) qd",
         );
+        let lambda = b.tunable(
+            "lambda",
+            PER_SECOND,
+            DEFAULT_TASK_LAMBDA,
+            "Weight of the position error in the learning signal, lambda (between 0 and kd)",
+        );
         let centre = [
             b.parameter("centre_x", METRE, centre[0], "x of the reference's centre"),
             b.parameter("centre_y", METRE, centre[1], "y of the reference's centre"),
@@ -123,6 +148,7 @@ impl TaskSpaceControllerModel {
         let text = format!("Task-space computed-torque controller for a {n}-joint planar arm, the paper's reference (neurarm)");
         let description = describe(identifier, text, b.finish())?;
         let data = TaskSpaceData::new(&model);
+        let learning = LearningSignalData::new(&model);
         Ok(Self {
             description,
             model,
@@ -137,7 +163,10 @@ impl TaskSpaceControllerModel {
             null_damping,
             centre,
             scale,
+            signal,
+            lambda,
             data,
+            learning,
             buf: std::array::from_fn(|_| vec![0.0; n]),
         })
     }
@@ -172,6 +201,13 @@ impl StaticModel for TaskSpaceControllerModel {
             return Err(ModelError::msg(format!("no control law at t = {time} s: the inputs q = {q:?}, qd = {qd:?} are not finite")));
         }
         values.write_reals(&self.tau, tau);
+        // The torque buffer is written: reuse the compensation buffer for the signal.
+        if !task_learning_signal_into(&self.model, &mut self.learning, q, qd, &reference, values[self.lambda], comp) {
+            return Err(ModelError::msg(format!(
+                "no learning signal at t = {time} s: the controller's mass matrix is not positive definite"
+            )));
+        }
+        values.write_reals(&self.signal, comp);
         Ok(())
     }
 }

@@ -5,40 +5,18 @@
 #[path = "../../physics/tests/support/counting.rs"]
 mod counting;
 
+#[path = "support/nets.rs"]
+mod nets;
+
 use counting::allocations_during;
 use fmi2_export::instance::{Instance, Status};
 use fmi2_export::Model;
-use nalgebra::{DMatrix, DVector};
+use nets::net_file;
 use neurarm_models::*;
 use neurarm_physics::arm::ArmParams;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::TaskSpaceGains;
-use neurarm_physics::nn::{MinMaxScaling, Mlp, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
-
-/// A small net with fixed weights, written as a weights file.
-fn net_file(n_in: usize, hidden: usize, n_out: usize) -> WeightsFile {
-    let f = |a: usize, b: usize| ((a * 7 + b * 3) % 11) as f64 / 8.0 - 0.6;
-    let net = Mlp {
-        iw: DMatrix::from_fn(hidden, n_in, f),
-        b1: DVector::from_fn(hidden, |j, _| f(j, 1)),
-        lw: DMatrix::from_fn(n_out, hidden, f),
-        b2: DVector::from_fn(n_out, |k, _| f(k, 2)),
-        input_scaling: MinMaxScaling { min: vec![-3.0; n_in], max: vec![3.0; n_in] },
-        output_scaling: MinMaxScaling { min: vec![-2.0; n_out], max: vec![2.0; n_out] },
-    };
-    let signals = |p: &str, n: usize| (1..=n).map(|i| Signal { name: format!("{p}_{i}"), unit: String::new() }).collect();
-    let report = TrainReport {
-        epochs: 0,
-        best_epoch: 0,
-        stop_reason: StopReason::Epochs,
-        restart: 0,
-        train_mse: 0.0,
-        validation_mse: None,
-        test_mse: None,
-        counts: [0; 3],
-    };
-    WeightsFile::new(&net, signals("x", n_in), signals("y", n_out), TrainSettings::default(), report)
-}
+use neurarm_physics::nn::WeightsFile;
 
 /// Initialises `model`, then counts the allocations of 500 steps of 1 ms, setting every real
 /// input to a new value before each step.
@@ -104,6 +82,14 @@ fn every_models_step_allocates_nothing() {
             gravity: Some("gravity.json".into()),
             enable_friction: true,
             enable_gravity: true,
+        }),
+        ModelSpec::AdaptiveCompensator(AdaptiveCompensatorSpec {
+            joints: 4,
+            friction: (1..=4).map(|j| format!("friction_{j}.json")).collect(),
+            gravity: Some("gravity.json".into()),
+            enable_friction: true,
+            enable_gravity: true,
+            law: AdaptationLaw::default(),
         }),
         ModelSpec::IdealCompensator(IdealCompensatorSpec {
             arm: arm.clone().with_base_angle(1.0),
