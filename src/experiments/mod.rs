@@ -4,6 +4,7 @@
 //! with the arms and sizes of a run in [`settings`]; [`paper`] runs them all. Experiments compute and return results; `crate::report` writes
 //! them. Every run is seeded, so results repeat exactly.
 
+pub mod adaptation;
 pub mod friction;
 pub mod gravity;
 pub mod gravity_study;

@@ -30,6 +30,21 @@ pub const LOOPS: [&str; 8] = [
     "joint_none",
 ];
 
+/// The online-adaptation loops of a run, in order: friction drift, payload (each per case of
+/// [`adaptation::CASES`]), then the steady run of the static and the adaptive net.
+pub const ADAPTATION_LOOPS: [&str; 10] = [
+    "drift_perfect",
+    "drift_static",
+    "drift_adaptive",
+    "drift_none",
+    "payload_perfect",
+    "payload_static",
+    "payload_adaptive",
+    "payload_none",
+    "steady_static",
+    "steady_adaptive",
+];
+
 /// One figure per case of Table 1 [unit as named by the field holding it].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Cases {
@@ -216,6 +231,8 @@ pub struct PaperResults {
     pub gravity: GravityResults,
     /// The joint-space loop.
     pub joint_loop: JointLoopResults,
+    /// Online adaptation: friction drift, payload, steady operation.
+    pub adaptation: adaptation::AdaptationResults,
     /// Seconds per stage.
     pub timings_s: Vec<(String, f64)>,
     /// Seconds in all.
@@ -235,6 +252,8 @@ pub struct PaperRun {
     pub gravity_pairs: Vec<GravityPair>,
     /// The closed-loop runs, in the order of [`LOOPS`].
     pub loops: Vec<LoopRun>,
+    /// The adaptation runs, in the order of [`ADAPTATION_LOOPS`].
+    pub adaptation_loops: Vec<LoopRun>,
     /// The arms.
     pub arms: Arms,
 }
@@ -534,6 +553,9 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     };
     lap("closed loops", log);
 
+    let (adaptation, adaptation_loops) = adaptation_runs(out, &fmu_dir, &systems_dir, arms, settings, &friction_files[1], &gravity_path)?;
+    lap("online adaptation", log);
+
     let (near, far) = arms.placement.distance_range();
     let setup = RunSetup {
         joints: n,
@@ -555,8 +577,112 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         friction,
         gravity,
         joint_loop,
+        adaptation,
         timings_s: timings,
         total_s: started.elapsed().as_secs_f64(),
     };
-    Ok(PaperRun { results, friction_pairs, friction_nets, gravity_pairs, loops, arms: arms.clone() })
+    Ok(PaperRun { results, friction_pairs, friction_nets, gravity_pairs, loops, adaptation_loops, arms: arms.clone() })
+}
+
+/// The online-adaptation runs on the real arm ([`adaptation`]): exports their compensators
+/// into `fmu_dir` (the ideal ones of the real arm, the adaptive ones from the real arm's
+/// friction nets `real_friction` and the gravity net), writes their system files into
+/// `systems_dir` and runs them.
+fn adaptation_runs(
+    out: &Path,
+    fmu_dir: &Path,
+    systems_dir: &Path,
+    arms: &Arms,
+    settings: &Settings,
+    real_friction: &[(String, PathBuf)],
+    gravity_path: &Path,
+) -> Result<(adaptation::AdaptationResults, Vec<LoopRun>), String> {
+    let n = arms.joints();
+    let a = &settings.adaptation;
+    let real = &arms.real.arm;
+    let export = |id: &str, model: ModelSpec, sources: &[(String, PathBuf)]| -> Result<PathBuf, String> {
+        let path = fmu_dir.join(format!("{id}.fmu"));
+        export_fmu(&FmuSpec { identifier: id.into(), model }, sources, &path)?;
+        Ok(path)
+    };
+    let ideal = |id: &str, arm: ArmParams, friction: bool| {
+        export(id, ModelSpec::IdealCompensator(IdealCompensatorSpec { arm, enable_friction: friction, enable_gravity: !friction }), &[])
+    };
+    let perfect_friction = ideal("IdealFrictionCompensatorReal", real.clone(), true)?;
+    let perfect_gravity = ideal("IdealGravityCompensatorReal", real.clone().with_base_angle(std::f64::consts::FRAC_PI_2), false)?;
+    let adaptive = |id: &str, friction: &[(String, PathBuf)], gravity: Option<&Path>, law: neurarm_models::AdaptationLaw| {
+        let mut sources = friction.to_vec();
+        if let Some(g) = gravity {
+            sources.push(("gravity.json".into(), g.to_path_buf()));
+        }
+        let model = ModelSpec::AdaptiveCompensator(neurarm_models::AdaptiveCompensatorSpec {
+            joints: n,
+            friction: friction.iter().map(|(name, _)| name.clone()).collect(),
+            gravity: gravity.map(|_| "gravity.json".to_owned()),
+            enable_friction: !friction.is_empty(),
+            enable_gravity: gravity.is_some(),
+            law,
+        });
+        export(id, model, &sources)
+    };
+    let adaptive_friction = adaptive("AdaptiveFrictionCompensatorReal", real_friction, None, a.friction_law)?;
+    let adaptive_gravity = adaptive("AdaptiveGravityCompensator", &[], Some(gravity_path), a.gravity_law)?;
+    let rel = |p: &Path| Path::new("..").join(p.strip_prefix(out).unwrap_or(p));
+    let fmu = |id: &str| rel(&fmu_dir.join(format!("{id}.fmu")));
+    let (arm_real, task, joint) = (fmu("PlanarArmReal"), fmu("TaskSpaceController"), fmu("JointController"));
+    let (pf, pg, af, ag) = (rel(&perfect_friction), rel(&perfect_gravity), rel(&adaptive_friction), rel(&adaptive_gravity));
+    let (sf, sg) = (fmu("NnFrictionCompensatorReal"), fmu("NnGravityCompensator"));
+    let friction_comps = adaptation::Compensators { perfect: &pf, static_nn: &sf, adaptive: &af };
+    let gravity_comps = adaptation::Compensators { perfect: &pg, static_nn: &sg, adaptive: &ag };
+    let start = tracking_start(&arms.nominal.arm, &arms.placement)?;
+    let gains = joint_loop_gains(&arms.nominal.arm, settings);
+    let payload_kg = a.payload_share * real.links[n - 1].mass_kg;
+    let mut specs: Vec<SystemSpec> =
+        (0..4).map(|c| adaptation::drift_system(&arm_real, &task, &friction_comps, c, &start, settings)).collect();
+    specs.extend((0..4).map(|c| adaptation::payload_system(&arm_real, &joint, &gravity_comps, c, &gains, payload_kg, settings)));
+    specs.extend([1, 2].map(|c| adaptation::steady_system(&arm_real, &task, &friction_comps, c, &start, settings)));
+    for (name, spec) in ADAPTATION_LOOPS.iter().zip(&specs) {
+        let toml = systems_dir.join(format!("{name}.toml"));
+        let text = format!(
+            "# The {name} loop of `neurarm paper` (online adaptation); rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
+            spec.to_toml()?
+        );
+        write_text_atomic(&toml, &text).map_err(writing(&toml))?;
+    }
+    let b = bar(specs.len() as u64, "online adaptation");
+    let tasks: Vec<(&str, SystemSpec)> = ADAPTATION_LOOPS.iter().copied().zip(specs).collect();
+    let loops = parallel(
+        tasks,
+        settings.threads,
+        |(name, spec)| run_loop(&spec, systems_dir).map_err(|e| format!("loop {name}: {e}")),
+        || b.inc(1),
+    )?;
+    b.finish_and_clear();
+    let end = a.drift_duration_s;
+    let drift_mse: [f64; 4] = std::array::from_fn(|c| adaptation::tracking_mse_between(&loops[c], end - a.drift_window_s, end));
+    let before: [f64; 4] = std::array::from_fn(|c| adaptation::tracking_mse_between(&loops[c], 0.0, 2.0 * std::f64::consts::PI));
+    let after = a.payload_time_s + a.payload_settle_s;
+    let settled: [Vec<f64>; 4] = std::array::from_fn(|c| adaptation::settled_errors_after(&loops[4 + c], n, after));
+    let settled_before: [Vec<f64>; 4] = std::array::from_fn(|c| {
+        let run = &loops[4 + c];
+        let kept: Vec<Vec<f64>> = run.rows.iter().filter(|r| r[0] < a.payload_time_s).cloned().collect();
+        adaptation::settled_errors_after(&LoopRun { columns: run.columns.clone(), rows: kept }, n, 0.0)
+    });
+    let steady = [0, 1].map(|k| adaptation::tracking_mse_between(&loops[8 + k], 0.0, a.steady_duration_s));
+    let results = adaptation::AdaptationResults {
+        drift_mse_m2: drift_mse,
+        drift_over_perfect: drift_mse.map(|m| m / drift_mse[0]),
+        drift_before_mse_m2: before,
+        drift_largest_adaptation_nm: adaptation::largest_adaptation(&loops[2], "friction"),
+        payload_kg,
+        payload_over_perfect: std::array::from_fn(|c| settled[c].iter().zip(&settled[0]).map(|(e, p)| e / p).collect()),
+        payload_settled_rad: settled,
+        payload_before_rad: settled_before,
+        payload_largest_adaptation_nm: adaptation::largest_adaptation(&loops[6], "gravity"),
+        steady_mse_m2: steady,
+        steady_adaptive_over_static: steady[1] / steady[0],
+        steady_largest_adaptation_nm: adaptation::largest_adaptation(&loops[9], "friction"),
+        friction_bound_nm: a.friction_law.bound_friction,
+    };
+    Ok((results, loops))
 }

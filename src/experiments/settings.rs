@@ -69,6 +69,8 @@ pub struct Settings {
     pub threads: usize,
     /// Whether this is the reduced run.
     pub quick: bool,
+    /// The online-adaptation runs.
+    pub adaptation: super::adaptation::AdaptationSettings,
 }
 
 impl Settings {
@@ -96,6 +98,7 @@ impl Settings {
             seed: 1,
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()).min(4),
             quick: false,
+            adaptation: super::adaptation::AdaptationSettings::full(),
         }
     }
 
@@ -108,6 +111,7 @@ impl Settings {
             gravity_epochs: 300,
             gravity_hidden: 10,
             quick: true,
+            adaptation: super::adaptation::AdaptationSettings::quick(),
             ..Self::paper()
         }
     }

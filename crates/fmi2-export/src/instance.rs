@@ -767,9 +767,16 @@ impl Instance {
         Ok(self.terminated)
     }
 
-    /// `fmi2GetFMUstate`.
+    /// `fmi2GetFMUstate`. Refused after a failed call left a Real output or local that is not
+    /// a finite number: such a state could not be restored (found by fuzzing: the state was
+    /// saved, then refused by `fmi2DeSerializeFMUstate`).
     pub fn get_state(&self) -> Result<Snapshot, Status> {
         self.check_phase("fmi2GetFMUstate", Function::FmuState)?;
+        if let Some(problem) = self.non_finite_real() {
+            return Err(self.error(&format!(
+                "fmi2GetFMUstate: {problem}, left by a failed call; a state holding it could not be restored, so none is saved (restore an earlier state or reset)"
+            )));
+        }
         let mut model = Vec::new();
         self.model.save_state(&mut model);
         Ok(Snapshot { phase: self.phase, time: self.time, start_time: self.start_time, values: self.values.clone(), model })

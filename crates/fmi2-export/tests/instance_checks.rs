@@ -176,3 +176,23 @@ fn states_with_numbers_that_are_not_finite_are_refused_by_the_layer_and_the_mode
     assert!(logged(&log, "sum[0] = inf is not a finite number"));
     assert_eq!(i.set_state(&i.deserialize(&bytes).unwrap()), Status::Ok);
 }
+
+#[test]
+fn no_state_is_saved_after_a_call_left_a_result_that_is_not_finite() {
+    // Found by fuzzing fmu_state: a restored state stepped into an infinite output; the state
+    // then saved held it and fmi2DeSerializeFMUstate refused its own FMU's state.
+    let (mut i, log) = instance(1e300);
+    assert_eq!(i.setup_experiment(None, 0.0, None), Status::Ok);
+    assert_eq!(i.enter_initialization_mode(), Status::Ok);
+    assert_eq!(i.exit_initialization_mode(), Status::Ok);
+    let good = i.get_state().unwrap();
+    assert_eq!(i.set_real(&[1], &[1e300]), Status::Ok);
+    assert_eq!(i.do_step(0.0, 0.1), Status::Error);
+    assert!(matches!(i.get_state(), Err(Status::Error)), "no state of a failed call");
+    assert!(logged(&log, "fmi2GetFMUstate: the model computed inf for 'y', not a finite number, left by a failed call"));
+    // An earlier state restores the instance, which then saves states again.
+    assert_eq!(i.set_state(&good), Status::Ok);
+    let again = i.get_state().unwrap();
+    let bytes = i.serialize(&again).unwrap();
+    assert!(i.deserialize(&bytes).is_ok());
+}

@@ -59,9 +59,12 @@ pub const JOINT_SEQUENCE: [[f64; 4]; 5] = [
 /// Duration of one segment of [`JOINT_SEQUENCE`] [s].
 pub const SEQUENCE_SEGMENT_S: f64 = 3.0;
 
-/// The built-in target of joint `i` at time `t` [s]; the last segment holds after its end.
-pub fn sequence_target(i: usize, t: f64) -> f64 {
-    let k = ((t / SEQUENCE_SEGMENT_S).floor().max(0.0) as usize).min(JOINT_SEQUENCE.len() - 1);
+/// The built-in target of joint `i` at time `t` [s]; after the last segment, that segment
+/// holds, or with `repeat` the sequence starts again (period 5 × [`SEQUENCE_SEGMENT_S`]).
+pub fn sequence_target(i: usize, t: f64, repeat: bool) -> f64 {
+    let segments = JOINT_SEQUENCE.len();
+    let k = (t / SEQUENCE_SEGMENT_S).floor().max(0.0);
+    let k = if repeat { (k % segments as f64) as usize } else { (k as usize).min(segments - 1) };
     JOINT_SEQUENCE[k][i % 4]
 }
 
@@ -80,6 +83,7 @@ pub struct JointControllerModel {
     kp: Vec<RealVar>,
     kd: Vec<RealVar>,
     use_sequence: BooleanVar,
+    repeat_sequence: BooleanVar,
 }
 
 impl JointControllerModel {
@@ -130,9 +134,14 @@ impl JointControllerModel {
         });
         let use_sequence =
             b.tunable_flag("use_sequence", use_sequence, "Follow the built-in target sequence (true) or the q_ref/qd_ref inputs (false)");
+        let repeat_sequence = b.tunable_flag(
+            "repeat_sequence",
+            false,
+            "Start the built-in sequence again after its last segment (false: the last target holds)",
+        );
         let text = format!("Joint-space P(D) controller with a compensation input for {joints} joints (neurarm)");
         let description = describe(identifier, text, b.finish())?;
-        Ok(Self { description, q, qd, tau_comp, q_ref, qd_ref, tau, target, signal, lambda, kp, kd, use_sequence })
+        Ok(Self { description, q, qd, tau_comp, q_ref, qd_ref, tau, target, signal, lambda, kp, kd, use_sequence, repeat_sequence })
     }
 }
 
@@ -143,9 +152,10 @@ impl StaticModel for JointControllerModel {
 
     fn compute(&mut self, values: &mut Values, time: f64) -> Result<(), ModelError> {
         let sequence = values[self.use_sequence];
+        let repeat = values[self.repeat_sequence];
         for i in 0..self.q.len() {
             let (target, target_velocity) =
-                if sequence { (sequence_target(i, time), 0.0) } else { (values[self.q_ref[i]], values[self.qd_ref[i]]) };
+                if sequence { (sequence_target(i, time, repeat), 0.0) } else { (values[self.q_ref[i]], values[self.qd_ref[i]]) };
             let tau = values[self.tau_comp[i]]
                 + values[self.kp[i]] * (target - values[self.q[i]])
                 + values[self.kd[i]] * (target_velocity - values[self.qd[i]]);
