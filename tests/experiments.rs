@@ -74,8 +74,46 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
     assert!(json["gravity"]["net"]["span"].is_null(), "no trained span for the periodic net");
     assert_eq!(json["gravity"]["encoding"].as_str(), Some("link_angles"));
     assert_eq!(json["setup"]["real_origin"]["kind"].as_str(), Some("emulated"));
-    for figure in ["friction.png", "tracking.png", "gravity.png", "gravity_compensation.png"] {
+    for figure in ["friction.png", "tracking.png", "gravity.png", "gravity_compensation.png", "adaptation.png"] {
         assert!(out.path().join(figure).is_file(), "{figure} written");
+    }
+    check_adaptation(out.path(), &json);
+}
+
+/// The online-adaptation targets of issue 15 on a quick run: after the friction drift the
+/// adaptive net tracks within 1.3× perfect compensation while the static net is at least 2×
+/// off; after the payload every joint's settled error is within 1.3× the ideal compensator's;
+/// with no change (noise on) adapting costs at most 5 % and no torque moves beyond the bound.
+/// And the adaptive FMU with `adapt = false` runs the static loop bit for bit.
+fn check_adaptation(out: &Path, json: &serde_json::Value) {
+    let a = &json["adaptation"];
+    let list = |v: &serde_json::Value| -> Vec<f64> { v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+    let drift = list(&a["drift_over_perfect"]);
+    eprintln!("drift over perfect (perfect, static, adaptive, none): {drift:?}");
+    assert!(drift[2] <= 1.3, "adaptive after the drift: {} × perfect", drift[2]);
+    assert!(drift[1] >= 2.0, "static after the drift: {} × perfect", drift[1]);
+    assert!(drift[3] > drift[1], "none is worse still");
+    let payload = a["payload_over_perfect"].as_array().unwrap();
+    let adaptive = list(&payload[2]);
+    eprintln!("payload, settled error over ideal per joint: static {:?}, adaptive {adaptive:?}", list(&payload[1]));
+    assert!(adaptive.iter().all(|&r| r <= 1.3), "adaptive after the payload: {adaptive:?} × ideal");
+    let steady = a["steady_adaptive_over_static"].as_f64().unwrap();
+    let (largest, bound) = (a["steady_largest_adaptation_nm"].as_f64().unwrap(), a["friction_bound_nm"].as_f64().unwrap());
+    eprintln!("steady: adaptive/static MSE {steady}, largest change {largest} N·m of {bound}");
+    assert!(steady <= 1.05, "steady: adaptive/static MSE {steady}");
+    assert!(largest <= bound * (1.0 + 1e-9), "steady: a torque moved {largest} N·m, beyond the bound {bound}");
+    // The adaptive loop with adaptation off is the static loop, bit for bit.
+    let systems = out.join("systems");
+    let read = |name: &str| SystemSpec::from_toml(&std::fs::read_to_string(systems.join(format!("{name}.toml"))).unwrap(), name).unwrap();
+    let mut off = read("drift_adaptive");
+    off.fmu.iter_mut().find(|f| f.name == "comp").unwrap().parameters.insert("adapt".into(), fmi2_cosim::Value::Boolean(false));
+    let (off, on) = (fmi2_cosim::run(&off, &systems, None).unwrap(), fmi2_cosim::run(&read("drift_static"), &systems, None).unwrap());
+    let column = |run: &fmi2_cosim::RunOutcome, name: &str| -> Vec<u64> {
+        let k = run.columns.iter().position(|c| c == name).unwrap();
+        run.rows.iter().map(|r| r[k].to_bits()).collect()
+    };
+    for name in ["ctl.error_x", "ctl.error_y", "arm.q_1", "ctl.tau_4"] {
+        assert_eq!(column(&off, name), column(&on, name), "{name}");
     }
 }
 

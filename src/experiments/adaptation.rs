@@ -69,7 +69,7 @@ impl AdaptationSettings {
             steady_duration_s: 600.0,
             mse_window_s: 1.0,
             friction_law: AdaptationLaw::default(),
-            gravity_law: AdaptationLaw { gain_gravity: 200.0, ..AdaptationLaw::default() },
+            gravity_law: AdaptationLaw::default(),
         }
     }
 
@@ -248,6 +248,25 @@ pub fn settled_errors_after(run: &LoopRun, joints: usize, from: f64) -> Vec<f64>
             let (target, q) = (column(run, &format!("ctl.q_target_{i}")), column(run, &format!("arm.q_{i}")));
             let (sum, count) = (0..t.len()).filter(|&k| keep[k]).fold((0.0, 0usize), |(s, c), k| (s + (target[k] - q[k]).abs(), c + 1));
             sum / count.max(1) as f64
+        })
+        .collect()
+}
+
+/// The settled error of each target segment: (segment end [s], mean over the joints of
+/// |q_target − q| over its last 0.5 s [rad]).
+pub fn settled_error_per_segment(run: &LoopRun, joints: usize) -> Vec<(f64, f64)> {
+    let t = column(run, "time");
+    let segment = neurarm_models::joint::SEQUENCE_SEGMENT_S;
+    let errors: Vec<(Vec<f64>, Vec<f64>)> =
+        (1..=joints).map(|i| (column(run, &format!("ctl.q_target_{i}")), column(run, &format!("arm.q_{i}")))).collect();
+    let end = t.last().copied().unwrap_or(0.0);
+    let segments = (end / segment + 1e-9).floor() as usize;
+    (0..segments)
+        .map(|k| {
+            let (from, to) = ((k + 1) as f64 * segment - 0.5, (k + 1) as f64 * segment);
+            let rows: Vec<usize> = (0..t.len()).filter(|&r| t[r] >= from - 1e-9 && t[r] < to - 1e-9).collect();
+            let sum: f64 = rows.iter().map(|&r| errors.iter().map(|(target, q)| (target[r] - q[r]).abs()).sum::<f64>()).sum();
+            (to, sum / (joints * rows.len().max(1)) as f64)
         })
         .collect()
 }

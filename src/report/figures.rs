@@ -119,7 +119,60 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
         }
         panels.push(Panel { title: format!("joint {j}"), x_label: "t [s]".into(), y_label: "q [rad]".into(), series });
     }
-    write_png(&out.join("gravity_compensation.png"), "Joint-space P control with gravity compensation", &panels, 2)
+    write_png(&out.join("gravity_compensation.png"), "Joint-space P control with gravity compensation", &panels, 2)?;
+    write_adaptation_figure(out, run)
+}
+
+/// `adaptation.png`: windowed tracking MSE over time of the friction-drift, payload and steady
+/// runs per compensator, and how far the adaptive nets moved.
+fn write_adaptation_figure(out: &Path, run: &PaperRun) -> Result<(), String> {
+    use crate::experiments::adaptation::{settled_error_per_segment, windowed_tracking_mse, CASES};
+    let loops = &run.adaptation_loops;
+    let a = &run.results.settings.adaptation;
+    let n = run.arms.joints();
+    let scaled = |points: Vec<(f64, f64)>, factor: f64| points.into_iter().map(|(t, m)| (t, m * factor)).collect::<Vec<_>>();
+    let series = |range: std::ops::Range<usize>, names: &[&str], points: &dyn Fn(&LoopRun) -> Vec<(f64, f64)>| -> Vec<Series> {
+        range.zip(names).map(|(k, name)| Series { name: name.to_string(), points: points(&loops[k]), style: Style::Line }).collect()
+    };
+    let tracking = |r: &LoopRun| scaled(windowed_tracking_mse(r, a.mse_window_s), 1e6);
+    let largest = |part: &'static str| {
+        move |r: &LoopRun| -> Vec<(f64, f64)> {
+            let columns: Vec<usize> =
+                r.columns.iter().enumerate().filter(|(_, c)| c.starts_with(&format!("comp.adapted_{part}_"))).map(|(k, _)| k).collect();
+            r.rows.iter().step_by(10).map(|row| (row[0], columns.iter().map(|&k| row[k]).fold(0.0, f64::max))).collect()
+        }
+    };
+    let panels = vec![
+        Panel {
+            title: format!("friction drift: viscous × {}, Coulomb × {} over {} s", a.viscous_scale, a.coulomb_scale, a.drift_ramp_s),
+            x_label: "t [s]".into(),
+            y_label: format!("tracking MSE over {} s [mm²]", a.mse_window_s),
+            series: series(0..4, &CASES, &tracking),
+        },
+        Panel {
+            title: format!("payload {:.3} kg at the tip from t = {} s", run.results.adaptation.payload_kg, a.payload_time_s),
+            x_label: "t [s]".into(),
+            y_label: "settled error per segment [mrad]".into(),
+            series: series(4..8, &CASES, &|r| scaled(settled_error_per_segment(r, n), 1e3)),
+        },
+        Panel {
+            title: "no change, noise on".into(),
+            x_label: "t [s]".into(),
+            y_label: format!("tracking MSE over {} s [mm²]", a.mse_window_s),
+            series: series(8..10, &CASES[1..3], &tracking),
+        },
+        Panel {
+            title: "largest change of a torque the adapted weights allow".into(),
+            x_label: "t [s]".into(),
+            y_label: "[N·m]".into(),
+            series: vec![
+                Series { name: "drift (friction)".into(), points: largest("friction")(&loops[2]), style: Style::Line },
+                Series { name: "payload (gravity)".into(), points: largest("gravity")(&loops[6]), style: Style::Line },
+                Series { name: "no change (friction)".into(), points: largest("friction")(&loops[9]), style: Style::Dashed },
+            ],
+        },
+    ];
+    write_png(&out.join("adaptation.png"), "Online adaptation (real arm)", &panels, 2)
 }
 
 /// `gravity_study.png`: the worst joint's whole-turn RMS error and largest error against the
