@@ -432,7 +432,10 @@ impl Instance {
             return s;
         }
         self.phase = Phase::Terminated;
-        Status::Ok
+        match self.model.terminate(&self.values) {
+            Ok(()) => Status::Ok,
+            Err(e) => self.error(&format!("fmi2Terminate: {e}")),
+        }
     }
 
     /// `fmi2Reset`: start values back, the model as after instantiation.

@@ -171,6 +171,13 @@ pub trait Model: Send {
     /// error is a failure (`fmi2Error`).
     fn do_step(&mut self, values: &mut Values, time: f64, step: f64) -> Result<(), ModelError>;
 
+    /// The simulation ends (`fmi2Terminate`): a model may hand over what it made (write a
+    /// file it was asked for). An error is logged and returned as `fmi2Error`; the instance is
+    /// terminated either way. The default does nothing.
+    fn terminate(&mut self, _values: &Values) -> Result<(), ModelError> {
+        Ok(())
+    }
+
     /// Back to the state right after instantiation (the layer restores the start values).
     fn reset(&mut self);
 

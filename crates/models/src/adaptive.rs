@@ -38,7 +38,7 @@
 use std::path::Path;
 
 use fmi2_export::codec::{Put, Reader};
-use fmi2_export::{BooleanVar, Model, ModelDescription, ModelError, RealVar, TableBuilder, Values};
+use fmi2_export::{BooleanVar, Causality, Model, ModelDescription, ModelError, RealVar, StringVar, TableBuilder, Values, Variability};
 use neurarm_physics::nn::{EncodedNet, WeightsFile};
 use serde::{Deserialize, Serialize};
 
@@ -131,6 +131,7 @@ struct LawPorts {
     bound_gravity: RealVar,
     adapted_friction: Vec<RealVar>,
     adapted_gravity: Vec<RealVar>,
+    nets_folder: StringVar,
 }
 
 /// The adaptive compensator behind the FMU.
@@ -141,6 +142,9 @@ pub struct AdaptiveCompensatorModel {
     rows: Vec<Row>,
     /// Regressor scratch: the hidden layer and the bias, H + 1.
     phi: Vec<f64>,
+    /// The offline weights files (friction nets in joint order, then the gravity net), for
+    /// writing the adapted nets with their signals and training record.
+    files: Vec<WeightsFile>,
 }
 
 /// Output rows of `net` as (LW row, b2) in one vector, and α of each output (1 for an output
@@ -217,6 +221,13 @@ impl AdaptiveCompensatorModel {
                 &[],
             )
         });
+        let nets_folder = b.string(
+            "nets_folder",
+            Causality::Parameter,
+            Variability::Tunable,
+            Some(String::new()),
+            "Folder to write the adapted nets into at fmi2Terminate (friction_i.json, gravity.json; empty: none)",
+        );
         let text = format!("Adaptive NN compensator of {which} torques for {joints} joints (neurarm; weights crc32 {fingerprint:08x})");
         let description = describe(identifier, text, b.finish())?;
         let mut rows = Vec::new();
@@ -240,8 +251,49 @@ impl AdaptiveCompensatorModel {
             bound_gravity,
             adapted_friction,
             adapted_gravity,
+            nets_folder,
         };
-        Ok(Self { description, core, law, rows, phi: vec![0.0; widest + 1] })
+        let files = friction.iter().chain(gravity).cloned().collect();
+        Ok(Self { description, core, law, rows, phi: vec![0.0; widest + 1], files })
+    }
+
+    /// The nets as they are now, as weights files named as `export compensator` and the
+    /// spec take them: `friction_i.json` per joint, `gravity.json`. Each keeps its offline
+    /// file's signals and training record, with the adapted output layer.
+    pub fn adapted_nets(&self) -> Vec<(String, WeightsFile)> {
+        let friction = self.core.friction.len();
+        self.files
+            .iter()
+            .enumerate()
+            .map(|(k, file)| {
+                let net = if k < friction { &self.core.friction[k] } else { self.core.gravity.as_ref().expect("a gravity file has a net") };
+                let mut file = file.clone();
+                for (o, row) in file.lw.iter_mut().enumerate() {
+                    row.copy_from_slice(net.mlp.lw.row(o).iter().copied().collect::<Vec<_>>().as_slice());
+                }
+                file.b2 = net.mlp.b2.iter().copied().collect();
+                let name = if k < friction { format!("friction_{}.json", k + 1) } else { "gravity.json".to_owned() };
+                (name, file)
+            })
+            .collect()
+    }
+
+    /// Writes [`Self::adapted_nets`] into `folder` (made if missing), each file through a
+    /// temporary file and a rename, so none is left half-written.
+    pub fn write_adapted_nets(&self, folder: &Path) -> Result<(), String> {
+        std::fs::create_dir_all(folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+        for (name, file) in self.adapted_nets() {
+            let path = folder.join(&name);
+            // A name no other writer uses (this process, this instance), in the same folder so
+            // the rename is atomic.
+            let partial = folder.join(format!(".{name}.partial-{}-{:p}", std::process::id(), self));
+            let written = std::fs::write(&partial, file.to_json()).and_then(|()| std::fs::rename(&partial, &path));
+            if let Err(e) = written {
+                let _ = std::fs::remove_file(&partial);
+                return Err(format!("{}: {e}", path.display()));
+            }
+        }
+        Ok(())
     }
 
     fn net(&self, row: &Row) -> &EncodedNet {
@@ -426,6 +478,14 @@ impl Model for AdaptiveCompensatorModel {
         self.core.compute(values);
         self.write_adapted(values);
         Ok(())
+    }
+
+    fn terminate(&mut self, values: &Values) -> Result<(), ModelError> {
+        let folder = &values[self.law.nets_folder];
+        if folder.is_empty() {
+            return Ok(());
+        }
+        self.write_adapted_nets(Path::new(folder)).map_err(|e| ModelError::msg(format!("writing the adapted nets: {e}")))
     }
 
     fn reset(&mut self) {

@@ -196,3 +196,49 @@ fn the_adapted_weights_are_fmu_state() {
     assert_eq!(run(&mut other, 200, 400), first, "and in another instance, from the serialized state");
     assert_eq!(a.reset(), Status::Ok);
 }
+
+#[test]
+fn the_adapted_nets_are_written_at_terminate_and_make_the_same_nn_compensator() {
+    let f = fixture();
+    let mut a = instance(&f, adaptive(AdaptationLaw::default()));
+    for k in 0..300 {
+        let t = k as f64 * 1e-3;
+        set(&mut a, &INPUTS, &[(3.0 * t).sin(), 0.5, 1.2 * (2.0 * t).cos(), -0.7]);
+        set(&mut a, &["s_1", "s_2"], &[(5.0 * t).sin(), 0.3]);
+        assert_eq!(a.do_step(t, 1e-3), Status::Ok);
+    }
+    let out = tempfile::tempdir().unwrap();
+    let folder = out.path().join("adapted");
+    let vr_folder = vr(&a, "nets_folder");
+    assert_eq!(a.set_string(&[vr_folder], &[folder.display().to_string()]), Status::Ok);
+    let probe = [0.4, -1.1, 0.8, -0.3];
+    set(&mut a, &INPUTS, &probe);
+    let adapted = get(&mut a, &TORQUES);
+    assert_eq!(a.terminate(), Status::Ok);
+    let mut names: Vec<String> = std::fs::read_dir(&folder).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    names.sort();
+    assert_eq!(names, ["friction_1.json", "friction_2.json", "gravity.json"], "and no partial file left");
+    let built = FmuSpec {
+        identifier: "N".into(),
+        model: ModelSpec::NnCompensator(NnCompensatorSpec {
+            joints: 2,
+            friction: vec!["friction_1.json".into(), "friction_2.json".into()],
+            gravity: Some("gravity.json".into()),
+            enable_friction: true,
+            enable_gravity: true,
+        }),
+    }
+    .build_from(Some(&folder))
+    .unwrap();
+    let guid = built.description().guid();
+    let mut nn = Instance::new("n", &guid, built, Box::new(|_, _, m| eprintln!("{m}")), false).unwrap();
+    assert_eq!(nn.setup_experiment(None, 0.0, None), Status::Ok);
+    assert_eq!(nn.enter_initialization_mode(), Status::Ok);
+    assert_eq!(nn.exit_initialization_mode(), Status::Ok);
+    set(&mut nn, &INPUTS, &probe);
+    assert_eq!(get(&mut nn, &TORQUES), adapted, "the written nets are the adapted ones, exactly");
+    let mut off = instance(&f, adaptive(AdaptationLaw { adapt: false, ..AdaptationLaw::default() }));
+    set(&mut off, &INPUTS, &probe);
+    let offline = get(&mut off, &TORQUES);
+    assert_ne!(offline, adapted, "and they did adapt");
+}
