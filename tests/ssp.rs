@@ -212,3 +212,26 @@ fn bad_systems_are_refused_by_unit_and_variable() {
     std::fs::write(dir.path().join("Text.fmu"), "hello").unwrap();
     check(loop_spec("Text.fmu"), &["'int'", "Text.fmu", "not an FMU"]);
 }
+
+#[test]
+fn events_go_into_our_annotation() {
+    let dir = tempfile::tempdir().unwrap();
+    fmu(dir.path(), "Integrator", ModelSpec::Integrator(IntegratorSpec { y0: 0.0 }));
+    fmu(dir.path(), "Gain", ModelSpec::Gain(GainSpec { k: 1.0 }));
+    let mut spec = loop_spec("Integrator.fmu");
+    spec.event.push(fmi2_cosim::EventSpec { time: 0.5, until: Some(1.5), set: [("gain.k".to_owned(), Value::Real(0.25))].into() });
+    let out = dir.path().join("events.ssp");
+    write_ssp(&spec, dir.path(), &out).unwrap();
+    let mut archive = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
+    let mut ssd = String::new();
+    archive.by_name("SystemStructure.ssd").unwrap().read_to_string(&mut ssd).unwrap();
+    let compact: String = ssd.lines().map(str::trim).collect();
+    assert!(
+        compact.contains(r#"<nr:Event time="0.5" until="1.5"><nr:Set variable="gain.k" type="Real" value="0.25"/></nr:Event>"#),
+        "{ssd}"
+    );
+    spec.event[0].until = Some(0.1);
+    let e = write_ssp(&spec, dir.path(), &dir.path().join("bad.ssp")).unwrap_err().to_string();
+    assert!(e.contains("event 1") && e.contains("until"), "{e}");
+    assert!(!dir.path().join("bad.ssp").exists());
+}

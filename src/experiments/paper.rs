@@ -648,6 +648,7 @@ fn adaptation_runs(
             spec.to_toml()?
         );
         write_text_atomic(&toml, &text).map_err(writing(&toml))?;
+        fmi2_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
     }
     let b = bar(specs.len() as u64, "online adaptation");
     let tasks: Vec<(&str, SystemSpec)> = ADAPTATION_LOOPS.iter().copied().zip(specs).collect();

@@ -55,9 +55,15 @@ SMOOTH_GAP = 1e-3  # [m] at 1 ms; measured 0.60-0.61 mm
 log_output_level(CosimLogLevel.ERROR)
 
 
+# The online-adaptation loops change the arm with events, which SSP 1.0 cannot hold (they are
+# in our annotation only): other engines would run them unchanged, so they are not compared here.
+ADAPTATION = [f"{run}_{case}" for run in ("drift", "payload") for case in ("perfect", "static", "adaptive", "none")] + [
+    "steady_static", "steady_adaptive"]
+
+
 def test_the_paper_writes_the_loops_classified_here(paper):
     written = sorted(p.stem for p in paper.glob("*.ssp"))
-    assert written == sorted(SMOOTH + list(ROUGH)), "a new loop: decide whether its run is smooth"
+    assert written == sorted(SMOOTH + list(ROUGH) + ADAPTATION), "a new loop: decide whether its run is smooth"
     assert written == sorted(p.stem for p in (paper / "systems").glob("*.toml"))
 
 

@@ -30,7 +30,9 @@
 //!   - ours, type [`ANNOTATION_TYPE`], with the step, the stepping algorithm and the recorded
 //!     variables: `<nr:Simulation stepSize="…" algorithm="gauss-seidel|jacobi"
 //!     recordEvery="…">` with one `<nr:Record variable="unit.variable"/>` per recorded
-//!     variable.
+//!     variable and one `<nr:Event time="…" [until="…"]>` per event of the system file, holding
+//!     `<nr:Set variable="unit.variable" type="Real|Integer|Boolean|String" value="…"/>`. SSP
+//!     1.0 has no events: other engines run such a system without its changes.
 //!
 //! What the engines make of it differs in the ordering, not in the system: see the README
 //! ("SSP files in other engines") for each engine's ordering and the measured gaps.
@@ -44,7 +46,7 @@ use quick_xml::Writer;
 
 use crate::error::MasterError;
 use crate::interface::{BaseType, Causality, EnumerationInfo};
-use crate::spec::{SimulationSpec, SystemSpec, Value};
+use crate::spec::{EventSpec, SimulationSpec, SystemSpec, Value};
 use crate::system::{check_value, Setting, System};
 
 const NS_SSD: &str = "http://ssp-standard.org/SSP1/SystemStructureDescription";
@@ -68,26 +70,28 @@ pub const ANNOTATION_TYPE: &str = "fmi2-cosim.simulation";
 ///
 /// `base` is the folder the spec's relative FMU paths are taken from. The FMUs are not
 /// loaded, only their `modelDescription.xml` read, and the system is checked as
-/// [`System::from_spec`] checks it. See [`write_system`]. A spec with events is refused: SSP
-/// 1.0 cannot hold them.
+/// [`System::from_spec`] checks it. See [`write_system`]. The spec's events go into our
+/// annotation (SSP 1.0 has no events: other engines ignore them).
 pub fn write_ssp(spec: &SystemSpec, base: &Path, out: &Path) -> Result<(), MasterError> {
-    if !spec.event.is_empty() {
-        return Err(MasterError::new(
-            "SSP 1.0 has no place for events ([[event]]): write the system without them, and give the changes to the engine that runs it",
-        ));
+    for (k, event) in spec.event.iter().enumerate() {
+        event.check().map_err(|e| MasterError::new(format!("event {}: {e}", k + 1)))?;
     }
-    write_system(&System::from_spec(spec, base)?, &spec.simulation, out)
+    write_with_events(&System::from_spec(spec, base)?, &spec.simulation, &spec.event, out)
 }
 
 /// Writes `out` as an SSP 1.0 archive of `system`, simulated as `simulation` says. The
 /// archive is written to a temporary file beside `out` and renamed over it when complete, so
 /// on any error nothing is left at `out` (and an existing `out` is untouched).
 pub fn write_system(system: &System, simulation: &SimulationSpec, out: &Path) -> Result<(), MasterError> {
+    write_with_events(system, simulation, &[], out)
+}
+
+fn write_with_events(system: &System, simulation: &SimulationSpec, events: &[EventSpec], out: &Path) -> Result<(), MasterError> {
     simulation.check().map_err(MasterError::new)?;
     system.recordable(&simulation.record)?;
     let system_name = out.file_stem().and_then(|s| s.to_str()).filter(|s| !s.is_empty()).unwrap_or("system").to_owned();
     let sources = sources(system)?;
-    let ssd = ssd_xml(system, simulation, &sources, &system_name);
+    let ssd = ssd_xml(system, simulation, events, &sources, &system_name);
     let mut resources: Vec<(PathBuf, String)> = Vec::new();
     for (u, source) in system.units().iter().zip(&sources) {
         if !resources.iter().any(|(_, s)| s == source) {
@@ -159,7 +163,7 @@ fn parameter_value(base: BaseType, value: &Value) -> (&'static str, String) {
 }
 
 /// The text of `SystemStructure.ssd`.
-fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], system_name: &str) -> String {
+fn ssd_xml(system: &System, simulation: &SimulationSpec, events: &[EventSpec], sources: &[String], system_name: &str) -> String {
     let ok = "writing XML to memory cannot fail";
     let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
     let start = |w: &mut Writer<Cursor<Vec<u8>>>, e: BytesStart| w.write_event(Event::Start(e)).expect(ok);
@@ -305,12 +309,33 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, sources: &[String], sys
         ("algorithm", algorithm),
         ("recordEvery", every.as_str()),
     ]);
-    if s.record.is_empty() {
+    if s.record.is_empty() && events.is_empty() {
         empty(&mut w, simulation);
     } else {
         start(&mut w, simulation);
         for r in &s.record {
             empty(&mut w, BytesStart::new("nr:Record").with_attributes([("variable", r.as_str())]));
+        }
+        for e in events {
+            let (time, until) = (xs_double(e.time), e.until.map(xs_double));
+            let mut element = BytesStart::new("nr:Event").with_attributes([("time", time.as_str())]);
+            if let Some(u) = &until {
+                element.push_attribute(("until", u.as_str()));
+            }
+            start(&mut w, element);
+            for (variable, value) in &e.set {
+                let (kind, text) = match value {
+                    Value::Real(x) => ("Real", xs_double(*x)),
+                    Value::Integer(i) => ("Integer", i.to_string()),
+                    Value::Boolean(b) => ("Boolean", b.to_string()),
+                    Value::String(t) => ("String", t.clone()),
+                };
+                empty(
+                    &mut w,
+                    BytesStart::new("nr:Set").with_attributes([("variable", variable.as_str()), ("type", kind), ("value", text.as_str())]),
+                );
+            }
+            end(&mut w, "nr:Event");
         }
         end(&mut w, "nr:Simulation");
     }
