@@ -193,7 +193,11 @@ pub fn tracking_mse_between(run: &LoopRun, from: f64, to: f64) -> f64 {
     let (sum, count) = (0..t.len())
         .filter(|&k| t[k] >= from - 1e-9 && t[k] <= to + 1e-9)
         .fold((0.0, 0usize), |(s, c), k| (s + ex[k] * ex[k] + ey[k] * ey[k], c + 1));
-    sum / (2.0 * count.max(1) as f64)
+    // No rows (a run that failed): NaN, not a perfect score.
+    if count == 0 {
+        return f64::NAN;
+    }
+    sum / (2.0 * count as f64)
 }
 
 fn column(run: &LoopRun, name: &str) -> Vec<f64> {
@@ -247,7 +251,11 @@ pub fn settled_errors_after(run: &LoopRun, joints: usize, from: f64) -> Vec<f64>
         .map(|i| {
             let (target, q) = (column(run, &format!("ctl.q_target_{i}")), column(run, &format!("arm.q_{i}")));
             let (sum, count) = (0..t.len()).filter(|&k| keep[k]).fold((0.0, 0usize), |(s, c), k| (s + (target[k] - q[k]).abs(), c + 1));
-            sum / count.max(1) as f64
+            if count == 0 {
+                f64::NAN
+            } else {
+                sum / count as f64
+            }
         })
         .collect()
 }
@@ -271,8 +279,12 @@ pub fn settled_error_per_segment(run: &LoopRun, joints: usize) -> Vec<(f64, f64)
         .collect()
 }
 
-/// The largest of the recorded `comp.adapted_friction_i` (or `_gravity_`) over a run [N·m].
+/// The largest of the recorded `comp.adapted_friction_i` (or `_gravity_`) over a run [N·m];
+/// NaN for a run without rows.
 pub fn largest_adaptation(run: &LoopRun, part: &str) -> f64 {
+    if run.rows.is_empty() {
+        return f64::NAN;
+    }
     run.columns
         .iter()
         .enumerate()
@@ -311,4 +323,6 @@ pub struct AdaptationResults {
     pub steady_largest_adaptation_nm: f64,
     /// The friction law's bound [N·m].
     pub friction_bound_nm: f64,
+    /// Runs that failed (loop name, why); their figures are NaN.
+    pub failures: Vec<(String, String)>,
 }

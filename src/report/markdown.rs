@@ -416,6 +416,9 @@ fn adaptation_section(s: &mut String, run: &PaperRun) {
     let n = run.arms.joints();
     let (f, g) = (&a.friction_law, &a.gravity_law);
     let _ = writeln!(s, "## Online adaptation (the paper's further work)\n");
+    for (name, why) in &r.failures {
+        let _ = writeln!(s, "**Run {name} failed**: {why}. Its figures below read NaN.\n");
+    }
     let _ = writeln!(
         s,
         "The `AdaptiveCompensator` FMU starts from the offline nets and adapts their output layers while the robot works: per \
