@@ -25,7 +25,6 @@ use neurarm_models::*;
 use neurarm_physics::arm::ArmParams;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::TaskSpaceGains;
-use neurarm_physics::nn::{InputEncoding, MinMaxScaling, NetKind, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
 
 /// Communication step [s].
 const STEP: f64 = 1e-3;
@@ -55,43 +54,6 @@ struct Model {
     outputs: Vec<u32>,
     /// Scale of the inputs (torques for the arm, angles and speeds for the others).
     amplitude: f64,
-}
-
-/// A small friction or gravity net with fixed weights, the units and names the compensator
-/// checks for.
-fn net(kind: NetKind, joint: Option<usize>, inputs: Vec<Signal>, outputs: Vec<Signal>, hidden: usize) -> WeightsFile {
-    let value = |a: usize, b: usize| ((a * 7 + b * 3) % 11) as f64 / 8.0 - 0.6;
-    let (n_in, n_out) = (inputs.len(), outputs.len());
-    WeightsFile {
-        format: neurarm_physics::nn::weights::FORMAT.into(),
-        version: neurarm_physics::nn::weights::VERSION,
-        encoding: InputEncoding::Raw,
-        kind,
-        joint,
-        iw: (0..hidden).map(|h| (0..n_in).map(|i| value(h, i)).collect()).collect(),
-        b1: (0..hidden).map(|h| value(h, 1)).collect(),
-        lw: (0..n_out).map(|o| (0..hidden).map(|h| value(o + joint.unwrap_or(0), h)).collect()).collect(),
-        b2: (0..n_out).map(|o| value(o, 2)).collect(),
-        input_scaling: MinMaxScaling { min: vec![-3.0; n_in], max: vec![3.0; n_in] },
-        output_scaling: MinMaxScaling { min: vec![-2.0; n_out], max: vec![2.0; n_out] },
-        inputs,
-        outputs,
-        training: TrainSettings::default(),
-        report: TrainReport {
-            epochs: 0,
-            best_epoch: 0,
-            stop_reason: StopReason::Epochs,
-            restart: 0,
-            train_mse: 0.0,
-            validation_mse: None,
-            test_mse: None,
-            counts: [0; 3],
-        },
-    }
-}
-
-fn signal(name: String, unit: &str) -> Signal {
-    Signal { name, unit: unit.into() }
 }
 
 /// Every model to soak: four PlanarArm configurations (plain; noise, encoders and torque limits;
@@ -173,32 +135,8 @@ fn models() -> Vec<Model> {
         .into_iter()
         .enumerate()
         .map(|(i, (name, model, amplitude))| {
-            // Every model gets the nets in its resources; the compensator reads them.
-            let dir = tempfile::tempdir().unwrap();
-            let resources = dir.path().join("resources");
-            std::fs::create_dir(&resources).unwrap();
-            for j in 1..=4 {
-                let file = net(
-                    NetKind::Friction,
-                    Some(j),
-                    vec![signal(format!("qd_{j}"), "rad/s")],
-                    vec![signal(format!("tau_friction_{j}"), "N.m")],
-                    5,
-                );
-                std::fs::write(resources.join(format!("friction_{j}.json")), file.to_json()).unwrap();
-            }
-            let gravity = net(
-                NetKind::Gravity,
-                None,
-                (1..=4).map(|j| signal(format!("q_{j}"), "rad")).collect(),
-                (1..=4).map(|j| signal(format!("tau_gravity_{j}"), "N.m")).collect(),
-                6,
-            );
-            std::fs::write(resources.join("gravity.json"), gravity.to_json()).unwrap();
-            let spec = FmuSpec { identifier: format!("Soak{i}"), model };
-            std::fs::write(resources.join(SPEC_FILE), spec.to_toml()).unwrap();
-            let description = spec.build_from(Some(&resources)).unwrap().description().clone();
-            let fmu = Fmu { api: Arc::new(Api::load(&binary_path())), dir, description };
+            // Every model gets the nets in its resources; the compensators read them.
+            let fmu = fmu_with_nets(&format!("Soak{i}"), model);
             let reals = |causality: Causality| -> Vec<u32> {
                 fmu.description
                     .variables

@@ -126,7 +126,7 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
 /// `adaptation.png`: windowed tracking MSE over time of the friction-drift, payload and steady
 /// runs per compensator, and how far the adaptive nets moved.
 fn write_adaptation_figure(out: &Path, run: &PaperRun) -> Result<(), String> {
-    use crate::experiments::adaptation::{settled_error_per_segment, windowed_tracking_mse, CASES};
+    use crate::experiments::adaptation::{settled_error_per_segment, windowed_joint_mse, windowed_tracking_mse, CASES};
     let loops = &run.adaptation_loops;
     let a = &run.results.settings.adaptation;
     let n = run.arms.joints();
@@ -154,6 +154,12 @@ fn write_adaptation_figure(out: &Path, run: &PaperRun) -> Result<(), String> {
             x_label: "t [s]".into(),
             y_label: "settled error per segment [mrad]".into(),
             series: series(4..8, &CASES, &|r| scaled(settled_error_per_segment(r, n), 1e3)),
+        },
+        Panel {
+            title: "payload: joint MSE, target steps included".into(),
+            x_label: "t [s]".into(),
+            y_label: format!("joint MSE over {} s [mrad²]", a.mse_window_s),
+            series: series(4..8, &CASES, &|r| scaled(windowed_joint_mse(r, n, a.mse_window_s), 1e6)),
         },
         Panel {
             title: "no change, noise on".into(),
