@@ -449,7 +449,7 @@ fn adaptation_section(s: &mut String, run: &PaperRun) {
     let _ = writeln!(s, "| before the drift | {} |", cells(&r.drift_before_mse_m2, &|x| format!("{x:.3e}")));
     let _ = writeln!(s, "| after the drift | {} |", cells(&r.drift_mse_m2, &|x| format!("{x:.3e}")));
     let _ = writeln!(s, "| after, / perfect | {} |", cells(&r.drift_over_perfect, &|x| format!("{x:.2}")));
-    let _ = writeln!(s, "\nThe adaptive net moved a friction torque by up to {:.3} N·m.\n", r.drift_largest_adaptation_nm);
+    let _ = writeln!(s, "\nThe adapted friction weights allowed a torque to differ from the offline net's by up to {:.3} N·m (the worst case over all inputs).\n", r.drift_largest_adaptation_nm);
     let _ = writeln!(
         s,
         "**Payload.** The joint-space gravity loop, its targets repeating, gripping {:.3} kg ({} × the last link's mass) at the \
@@ -473,11 +473,11 @@ fn adaptation_section(s: &mut String, run: &PaperRun) {
             row(&std::iter::once(label).chain(r.payload_over_perfect[k].iter().map(|x| format!("{x:.2}"))).collect::<Vec<_>>())
         );
     }
-    let _ = writeln!(s, "\nThe adaptive net moved a gravity torque by up to {:.3} N·m.\n", r.payload_largest_adaptation_nm);
+    let _ = writeln!(s, "\nThe adapted gravity weights allowed a torque to differ from the offline net's by up to {:.3} N·m (the worst case over all inputs).\n", r.payload_largest_adaptation_nm);
     let _ = writeln!(
         s,
         "**No change, noise on.** The tracking task for {} s: MSE static {:.3e} m², adaptive {:.3e} m² (adaptive / static = {:.3}); \
-         the adaptive net moved a friction torque by up to {:.3} N·m of the {} N·m bound.\n",
+         the adapted weights allowed a friction torque to differ from the offline net's by up to {:.3} N·m, within the {} N·m bound.\n",
         a.steady_duration_s,
         r.steady_mse_m2[0],
         r.steady_mse_m2[1],
