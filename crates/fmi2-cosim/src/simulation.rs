@@ -378,6 +378,8 @@ impl Simulation {
             }
         }
         self.events.extend(added);
+        // New events due now are applied before the next step, even if others were already.
+        self.events_applied_at = None;
         // Stable: equal times keep the order they were given in.
         self.events.sort_by(|a, b| a.time.total_cmp(&b.time));
         Ok(())
