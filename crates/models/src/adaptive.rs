@@ -140,8 +140,10 @@ pub struct AdaptiveCompensatorModel {
     core: NetCompensator,
     law: LawPorts,
     rows: Vec<Row>,
-    /// Regressor scratch: the hidden layer and the bias, H + 1.
+    /// Regressor scratch of a friction net: its hidden layer and the bias, H + 1.
     phi: Vec<f64>,
+    /// The gravity net's regressor, shared by all its outputs.
+    phi_gravity: Vec<f64>,
     /// The offline weights files (friction nets in joint order, then the gravity net), for
     /// writing the adapted nets with their signals and training record.
     files: Vec<WeightsFile>,
@@ -254,7 +256,8 @@ impl AdaptiveCompensatorModel {
             nets_folder,
         };
         let files = friction.iter().chain(gravity).cloned().collect();
-        Ok(Self { description, core, law, rows, phi: vec![0.0; widest + 1], files })
+        let phi_gravity = vec![0.0; core.gravity.as_ref().map_or(0, EncodedNet::hidden) + 1];
+        Ok(Self { description, core, law, rows, phi: vec![0.0; widest + 1], phi_gravity, files })
     }
 
     /// The nets as they are now, as weights files named as `export compensator` and the
@@ -365,9 +368,13 @@ impl AdaptiveCompensatorModel {
         let use_friction = values[p.enable_friction] && !self.core.friction.is_empty();
         let use_gravity = values[p.enable_gravity] && self.core.gravity.is_some();
         if use_gravity {
+            // One regressor for every gravity output: the hidden layer at the angles.
             self.core.gravity_input(values);
             let g = self.core.gravity.as_ref().expect("checked");
             g.encoding.encode_into(&self.core.x, &mut self.core.features);
+            let hidden = g.hidden();
+            hidden_layer(g, &self.core.features, &mut self.phi_gravity[..hidden]);
+            self.phi_gravity[hidden] = 1.0;
         }
         for r in 0..self.rows.len() {
             let row = &self.rows[r];
@@ -379,14 +386,15 @@ impl AdaptiveCompensatorModel {
                 continue;
             }
             // The regressor: the hidden layer at the current input, and the bias.
-            let net = net_of(&self.core, row);
-            let hidden = net.hidden();
-            let phi = &mut self.phi[..hidden + 1];
-            match row.friction_net {
-                Some(_) => hidden_layer(net, &[values[self.core.ports.qd[joint]]], &mut phi[..hidden]),
-                None => hidden_layer(net, &self.core.features, &mut phi[..hidden]),
-            }
-            phi[hidden] = 1.0;
+            let hidden = net_of(&self.core, row).hidden();
+            let phi: &[f64] = match row.friction_net {
+                Some(_) => {
+                    hidden_layer(net_of(&self.core, row), &[values[self.core.ports.qd[joint]]], &mut self.phi[..hidden]);
+                    self.phi[hidden] = 1.0;
+                    &self.phi[..hidden + 1]
+                }
+                None => &self.phi_gravity,
+            };
             let s = values[self.law.signal[joint]];
             // In the net's scaled units θ = w / α: θ̇ = (γ / α) φ s − σ (θ − θ⁰).
             let rate = gain / row.alpha * s;
@@ -394,7 +402,7 @@ impl AdaptiveCompensatorModel {
             let output = row.output;
             let net = Self::net_mut(&mut self.core, row);
             let mut distance2 = 0.0;
-            for (j, (&phi_j, &w0)) in self.phi[..hidden + 1].iter().zip(&row.offline).enumerate() {
+            for (j, (&phi_j, &w0)) in phi.iter().zip(&row.offline).enumerate() {
                 let w = Self::weight(net, output, j);
                 let next = w + h * (rate * phi_j - law.leakage * (w - w0));
                 set_weight(net, output, j, next);
