@@ -12,6 +12,7 @@
 pub mod arm;
 pub mod config;
 pub mod control;
+pub mod family;
 pub mod linalg;
 pub mod nn;
 pub mod text_file;
