@@ -134,6 +134,14 @@ const SPEED_LEVEL_SETTLE_S: f64 = 0.5;
 /// Time a low-speed level is averaged over [s].
 const SPEED_LEVEL_AVERAGE_S: f64 = 1.0;
 
+/// Smallest torque step between constant-torque levels [N·m]: a joint with almost no viscous
+/// friction needs steps this fine to space its levels by the velocity spacing.
+const MIN_TORQUE_STEP_NM: f64 = 1e-5;
+
+/// A moving level this many velocity spacings above the one before it has left a gap: the
+/// levels are climbed again from below it with a finer step.
+const OVERSHOOT_SPACINGS: f64 = 3.0;
+
 /// Drives joint `joint` of the arm in `arm_fmu` with constant torques in `direction` (±1),
 /// the others held at 0 (see [`FrictionHold`]), raising the torque level by level until the
 /// steady speed passes `settings.max_velocity`. Each level lasts until the measured
@@ -246,16 +254,28 @@ pub fn friction_run(
         };
         let mean = verdict.speed_rad_s;
         let moving = mean * direction > 2.0 * settings.bin_width.min(0.05);
+        let mut overshot = false;
         if moving {
             if let Some(&(t0, v0)) = moving_levels.last() {
                 let slope = (tau - t0) / (mean - v0);
                 if slope.is_finite() && slope > 0.0 {
                     // At most doubling: one level whose speed barely moved (noise, the Stribeck
                     // dip) would otherwise make the next step jump by a whole rad/s.
-                    increment = (slope * settings.velocity_spacing).clamp(1e-3, (2.0 * increment).min(0.5));
+                    let adapted = (slope * settings.velocity_spacing).clamp(MIN_TORQUE_STEP_NM, (2.0 * increment).min(0.5));
+                    // A step far too large for this joint's viscous slope (the first steps are
+                    // made before any slope is known) jumps past speeds no level then covers:
+                    // go back to the last level below the jump and climb again with the step the
+                    // slope asks for. The step only shrinks on the way back, so this ends.
+                    overshot = (mean - v0).abs() > OVERSHOOT_SPACINGS * settings.velocity_spacing && adapted < 0.5 * increment;
+                    increment = adapted;
+                    if overshot {
+                        tau = t0;
+                    }
                 }
             }
-            moving_levels.push((tau, mean));
+            if !overshot {
+                moving_levels.push((tau, mean));
+            }
         }
         // Every level is kept for the identification, the probes at rest below the first
         // moving level among them (they give the pair at rest).
@@ -265,7 +285,7 @@ pub fn friction_run(
             speed: record.speed[trimmed_from..].to_vec(),
             torque: record.torque[trimmed_from..].to_vec(),
         });
-        if mean * direction >= settings.max_velocity {
+        if !overshot && mean * direction >= settings.max_velocity {
             break;
         }
         if tau.abs() > 100.0 {
