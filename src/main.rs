@@ -970,7 +970,7 @@ fn run(cli: Cli) -> Result<()> {
             let start = neurarm::experiments::tracking_start(&arm, &placement).map_err(anyhow::Error::msg)?;
             let model = ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
                 model: arm.frictionless(),
-                gains: TaskSpaceGains { kp, kd, null_damping },
+                gains: TaskSpaceGains { kp, kd, null_damping, ..TaskSpaceGains::default() },
                 centre: [placement.centre.x, placement.centre.y],
                 scale: placement.scale,
                 q_start: start.q,

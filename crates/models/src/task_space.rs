@@ -1,7 +1,7 @@
 //! The `TaskSpaceController` FMU: task-space computed torque for the redundant planar arm,
 //! tracking the paper's reference `x_d(t) = c + s (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))`
 //! [m] around the centre c, scaled by s:
-//! `u = J⁺ (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J⁺J) q̇`,
+//! `u = J⁺ (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) + (I − J⁺J)(k_rest (q_rest − q) − k_null q̇)`,
 //! `τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + τ_comp`, with Ĥ, Ĉ, ĝ from the controller's model of the
 //! arm (friction is left to `tau_comp`). Static in its inputs (direct feedthrough); the
 //! reference depends on time. Outputs `s_i`, the learning signal an adaptive compensator
@@ -18,7 +18,7 @@ use neurarm_physics::control::{
 use serde::{Deserialize, Serialize};
 
 use crate::ports::ControllerInputs;
-use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED};
+use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN};
 use crate::{describe, per_joint, BuildError, ModelKind};
 
 /// Default λ of the learning signal [1/s]: the position error's weight, between 0 and the
@@ -55,8 +55,8 @@ impl ModelKind for TaskSpaceControllerSpec {
     fn equations_html(&self) -> &'static str {
         "<p>Reference (centre c = (centre_x, centre_y), scale s = reference_scale): \
 <code>x_d(t) = c + s (0.2 (cos t + sin 2t), 0.15 (sin t + cos 2t))</code> [m].</p>\
-<p><code>u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) − k_null (I − J#J) q̇</code>, with J# the Moore–Penrose pseudo-inverse \
-(Jᵀ(JJᵀ)⁻¹ away from singular poses; at a singular pose the direction J has lost gets no acceleration); the last term damps the self-motion of the redundant joints, which the task does not fix.</p>\
+<p><code>u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) + (I − J#J)(k_rest (q_rest − q) − k_null q̇)</code>, with J# the Moore–Penrose pseudo-inverse \
+(Jᵀ(JJᵀ)⁻¹ away from singular poses; at a singular pose the direction J has lost gets no acceleration); the last term acts on the self-motion of the redundant joints, which the task does not fix: it damps it and, with k_rest &gt; 0 (default 0), brings it back to the rest pose q_rest (each joint's distance taken within ±π), so it cannot drift; on arms with strong joint friction a stiffness lets redundant joints come to rest and stick, hence the default.</p>\
 <p><code>τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + tau_comp</code>, Ĥ, Ĉ, ĝ from the controller's own arm model \
 (in resources/neurarm.toml). Non-finite inputs fail the step with fmi2Error.</p>"
     }
@@ -75,6 +75,8 @@ pub struct TaskSpaceControllerModel {
     kp: RealVar,
     kd: RealVar,
     null_damping: RealVar,
+    null_stiffness: RealVar,
+    rest_pose: Vec<RealVar>,
     centre: [RealVar; 2],
     scale: RealVar,
     signal: Vec<RealVar>,
@@ -134,6 +136,20 @@ impl TaskSpaceControllerModel {
             gains.null_damping,
             "Null-space damping k_null: self-motion decays as -k_null (I - J#J) qd",
         );
+        let null_stiffness = b.tunable(
+            "null_stiffness",
+            PER_SECOND_SQUARED,
+            gains.null_stiffness,
+            "Null-space stiffness k_rest: the self-motion returns to the rest pose as (I - J#J)(k_rest (q_rest - q) - k_null qd); 0 (default) damps it only",
+        );
+        let rest_pose = per_joint(&mut b, n, |b, i| {
+            b.tunable(
+                format!("q_rest_{}", i + 1),
+                RADIAN,
+                q_start[i],
+                format!("Rest angle of joint {} the self-motion returns to (default: the start pose)", i + 1),
+            )
+        });
         let lambda = b.tunable(
             "lambda",
             PER_SECOND,
@@ -161,6 +177,8 @@ impl TaskSpaceControllerModel {
             kp,
             kd,
             null_damping,
+            null_stiffness,
+            rest_pose,
             centre,
             scale,
             signal,
@@ -183,7 +201,15 @@ impl StaticModel for TaskSpaceControllerModel {
         values.read_reals(&self.qd, qd);
         values.read_reals(&self.tau_comp, comp);
         let centre = Vector2::new(values[self.centre[0]], values[self.centre[1]]);
-        let gains = TaskSpaceGains { kp: values[self.kp], kd: values[self.kd], null_damping: values[self.null_damping] };
+        let gains = TaskSpaceGains {
+            kp: values[self.kp],
+            kd: values[self.kd],
+            null_damping: values[self.null_damping],
+            null_stiffness: values[self.null_stiffness],
+        };
+        // The rest pose goes through the torque buffer, which the law overwrites.
+        values.read_reals(&self.rest_pose, tau);
+        self.data.set_rest_pose(Some(tau));
         let (position, velocity, acceleration) = scaled_reference(time, centre, values[self.scale]);
         if ![position, velocity, acceleration].iter().all(|v| v.x.is_finite() && v.y.is_finite()) {
             return Err(ModelError::msg(format!(

@@ -113,6 +113,83 @@ fn closed_loop_error_follows_the_second_order_error_dynamics() {
     }
 }
 
+/// With a rest pose, the null-space part of q̈ (forward dynamics of the computed torque) is
+/// (I − J⁺J)(k_s wrap(q_rest − q) − k q̇), the task part unchanged; a joint one turn away from
+/// its rest angle is home.
+#[test]
+fn the_rest_pose_pulls_the_self_motion_back_through_the_null_space() {
+    let arm = ArmParams::default_four_link().frictionless().with_base_angle(0.7);
+    let mut sim = ArmSimulator::new(arm.clone(), IntegratorSettings::default()).unwrap();
+    let gains = TaskSpaceGains { null_stiffness: 25.0, ..TaskSpaceGains::default() };
+    let mut data = TaskSpaceData::new(&arm);
+    let rest = [0.1, 0.8, -0.4, 0.9 + std::f64::consts::TAU];
+    data.set_rest_pose(Some(&rest));
+    assert_eq!(data.rest_pose(), Some(&rest[..]));
+    let (x, v, a) = paper_reference(0.5, Vector2::new(0.45, 0.2));
+    let reference = TaskReference { position: x, velocity: v, acceleration: a };
+    for q in [[0.3, 1.1, -0.7, 0.5], [-0.4, 0.9, 1.2, -0.8]] {
+        let qd = [0.4, -0.2, 0.6, 0.1];
+        let mut tau = [0.0; 4];
+        assert!(task_space_torque_into(&arm, &mut data, &q, &qd, &reference, &gains, &[0.0; 4], &mut tau));
+        let qdd = DVector::from_column_slice(&sim.forward_dynamics(&ArmState { q: q.to_vec(), qd: qd.to_vec() }, &tau));
+        let jac = jacobian(&arm, &q);
+        let null = nalgebra::DMatrix::<f64>::identity(4, 4) - &pseudo_inverse(&jac).unwrap() * &jac;
+        let wrapped: Vec<f64> = (0..4).map(|i| rest[i] - q[i] - if i == 3 { std::f64::consts::TAU } else { 0.0 }).collect();
+        let target = DVector::from_iterator(4, (0..4).map(|i| gains.null_stiffness * wrapped[i] - gains.null_damping * qd[i]));
+        assert!((&null * &qdd - &null * target).amax() < 1e-9, "pose {q:?}");
+        let xdd = &jac * &qdd + DVector::from_column_slice(jacobian_dot_qd(&arm, &q, &qd).as_slice());
+        let want = a + gains.kd * (v - end_effector_velocity(&arm, &q, &qd)) + gains.kp * (x - end_effector_position(&arm, &q));
+        assert!((xdd[0] - want[0]).abs() < 1e-9 && (xdd[1] - want[1]).abs() < 1e-9);
+    }
+    assert!(
+        (wrapped_angle(3.5) - (3.5 - std::f64::consts::TAU)).abs() < 1e-15 && wrapped_angle(std::f64::consts::PI) == std::f64::consts::PI
+    );
+}
+
+/// Damping alone lets the self-motion drift: a small constant torque error on a redundant
+/// arm holding a fixed point moves its pose through the task's null space until the error has
+/// no share there, while with the rest pose it settles near home, where the first-order
+/// balance k_s Δq = (I − J⁺J) H⁻¹ τ_offset puts it.
+#[test]
+fn with_a_rest_pose_a_small_torque_error_no_longer_makes_the_pose_drift() {
+    let arm = ArmParams::default_four_link().frictionless();
+    let q0 = vec![0.3, 1.1, -0.7, 0.5];
+    let target = end_effector_position(&arm, &q0);
+    let reference = TaskReference { position: target, velocity: Vector2::zeros(), acceleration: Vector2::zeros() };
+    let offset = [0.0, 0.0, 0.0, 0.05];
+    let gains = TaskSpaceGains { null_stiffness: 25.0, ..TaskSpaceGains::default() };
+    let run = |rest: bool| {
+        let mut sim = ArmSimulator::new(arm.clone(), IntegratorSettings { internal_step_s: 1e-3 }).unwrap();
+        let mut data = TaskSpaceData::new(&arm);
+        data.set_rest_pose(rest.then_some(&q0[..]));
+        let mut state = ArmState::at_rest(q0.clone());
+        let mut tau = [0.0; 4];
+        let mut drift = [0.0; 2];
+        for step in 0..20_000 {
+            assert!(task_space_torque_into(&arm, &mut data, &state.q, &state.qd, &reference, &gains, &offset, &mut tau));
+            sim.step(&mut state, &tau, 1e-3).unwrap();
+            if step == 9_999 || step == 19_999 {
+                drift[step / 10_000] = state.q.iter().zip(&q0).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+            }
+        }
+        // The offset leaves a steady task error of J H⁻¹ offset / K_p, about 1 mm here, either way.
+        assert!((end_effector_position(&arm, &state.q) - target).norm() < 5e-3);
+        drift
+    };
+    let damped = run(false);
+    let held = run(true);
+    // To first order the held pose sits where k_s (I − J⁺J) Δq balances the offset's
+    // null-space acceleration (I − J⁺J) H⁻¹ τ_offset.
+    let jac = jacobian(&arm, &q0);
+    let null = nalgebra::DMatrix::<f64>::identity(4, 4) - &pseudo_inverse(&jac).unwrap() * &jac;
+    let push = &null * mass_matrix(&arm, &q0).try_inverse().unwrap() * DVector::from_column_slice(&offset);
+    let predicted = push.norm() / gains.null_stiffness;
+    assert!((held[1] - held[0]).abs() < 0.01 * held[0], "held pose settled: {held:?} rad");
+    assert!((held[1] / predicted - 1.0).abs() < 0.3, "held {held:?} rad, first-order prediction {predicted} rad");
+    // Damped only, the pose wanders until the offset has no null-space share left.
+    assert!(damped[0] > 4.0 * held[0], "damped only the pose drifts far: {damped:?} rad (held {held:?})");
+}
+
 #[test]
 fn joint_p_torque_adds_gravity_compensation() {
     let tau = joint_p_torque(&[0.1, 0.2], &[0.3, 0.0], 2.0, &[1.0, -1.0]);
@@ -121,7 +198,8 @@ fn joint_p_torque_adds_gravity_compensation() {
 
 /// The placement rule scales the paper's curve with the reach: for the default 1 m arm it is
 /// the paper's size around (0.45, 0.10) m, between 0.23 m and 0.84 m from the base (from the
-/// curve's formula, sampled here); an arm too short, or with a hole in its workspace, is refused.
+/// curve's formula, sampled here); an arm too short is refused, and for one with a hole in its
+/// workspace the curve is fitted into the ring the arm reaches.
 #[test]
 fn the_reference_is_placed_by_the_reach_and_checked_against_the_workspace() {
     let arm = ArmParams::default_four_link();
@@ -152,7 +230,19 @@ fn the_reference_is_placed_by_the_reach_and_checked_against_the_workspace() {
     lopsided.links.truncate(2);
     lopsided.friction.truncate(2);
     lopsided.links[1].length_m = 0.05;
-    let hole = ReferencePlacement::for_arm(&lopsided).check(&lopsided).unwrap_err();
+    let by_reach = ReferencePlacement { centre: Vector2::new(0.45 * 0.3, 0.10 * 0.3), scale: 0.3 };
+    let hole = by_reach.check(&lopsided).unwrap_err();
     assert!(matches!(hole, PlacementError::TooNear { hole, .. } if (hole - 0.2).abs() < 1e-12), "{hole}");
+    assert!((workspace_hole(&lopsided) - 0.2).abs() < 1e-12 && workspace_hole(&arm) == 0.0);
+    // for_arm fits the curve into the ring 0.2–0.3 m the lopsided arm reaches instead: the
+    // distances sampled from the curve itself lie 23 % / 16 % of the ring inside its edges.
+    let fitted = ReferencePlacement::for_arm(&lopsided);
+    assert!(fitted.fitted(&lopsided) && !p.fitted(&arm));
+    assert!(fitted.check(&lopsided).is_ok(), "{:?}", fitted.check(&lopsided));
+    let distances: Vec<f64> = (0..6284).map(|k| scaled_reference(k as f64 * 1e-3, fitted.centre, fitted.scale).0.norm()).collect();
+    let (near, far) = (distances.iter().cloned().fold(f64::INFINITY, f64::min), distances.iter().cloned().fold(0.0, f64::max));
+    assert!(near >= 0.2 + 0.23 * 0.1 - 1e-6 && far <= 0.3 - 0.16 * 0.1 + 1e-6, "{near} {far}");
+    // As large as fits: one margin is met within 0.1 mm.
+    assert!((near - 0.223).abs() < 1e-4 || (far - 0.284).abs() < 1e-4, "{near} {far}");
     assert!(matches!(ReferencePlacement { scale: -1.0, ..p }.check(&arm), Err(PlacementError::Invalid { .. })));
 }
