@@ -134,12 +134,12 @@ const SPEED_LEVEL_SETTLE_S: f64 = 0.5;
 /// Time a low-speed level is averaged over [s].
 const SPEED_LEVEL_AVERAGE_S: f64 = 1.0;
 
-/// Smallest torque step between constant-torque levels [N·m]: a joint with almost no viscous
-/// friction needs steps this fine to space its levels by the velocity spacing.
-const MIN_TORQUE_STEP_NM: f64 = 1e-5;
+/// Smallest torque step between constant-torque levels [N·m]: spaces the levels by 0.1 rad/s
+/// down to a viscous slope of 0.01 N·m·s/rad.
+const MIN_TORQUE_STEP_NM: f64 = 1e-3;
 
-/// A moving level this many velocity spacings above the one before it has left a gap: the
-/// levels are climbed again from below it with a finer step.
+/// A second moving level this many velocity spacings above the first has left a gap: the
+/// levels are climbed again from the first with a finer step.
 const OVERSHOOT_SPACINGS: f64 = 3.0;
 
 /// Drives joint `joint` of the arm in `arm_fmu` with constant torques in `direction` (±1),
@@ -262,11 +262,14 @@ pub fn friction_run(
                     // At most doubling: one level whose speed barely moved (noise, the Stribeck
                     // dip) would otherwise make the next step jump by a whole rad/s.
                     let adapted = (slope * settings.velocity_spacing).clamp(MIN_TORQUE_STEP_NM, (2.0 * increment).min(0.5));
-                    // A step far too large for this joint's viscous slope (the first steps are
-                    // made before any slope is known) jumps past speeds no level then covers:
-                    // go back to the last level below the jump and climb again with the step the
-                    // slope asks for. The step only shrinks on the way back, so this ends.
-                    overshot = (mean - v0).abs() > OVERSHOOT_SPACINGS * settings.velocity_spacing && adapted < 0.5 * increment;
+                    // The step to the second moving level is made before any slope is known;
+                    // far too large for a joint with little viscous friction, it jumps past
+                    // speeds no level then covers: go back to the first moving level, once, and
+                    // climb again with the step the slope asks for. (Later jumps, where friction
+                    // falls with speed faster than the levels can follow, are the law's own.)
+                    overshot = moving_levels.len() == 1
+                        && (mean - v0).abs() > OVERSHOOT_SPACINGS * settings.velocity_spacing
+                        && adapted < 0.5 * increment;
                     increment = adapted;
                     if overshot {
                         tau = t0;
