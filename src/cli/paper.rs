@@ -1,0 +1,162 @@
+//! `neurarm paper`: the paper's experiments end to end (identification, training, Table 1,
+//! gravity compensation) through the master and the FMUs, into one output folder.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use clap::Args;
+use neurarm_physics::config::ArmConfig;
+use neurarm_physics::control::ReferencePlacement;
+use neurarm_physics::nn::InputEncoding;
+
+use super::common::{load_config, parse_encoding};
+
+/// The arguments of `neurarm paper`. Its help text is the doc of `Command::Paper` in
+/// main.rs, which clap shows instead of this one.
+#[derive(Args)]
+pub struct PaperArgs {
+    /// Arm configuration (TOML, see `neurarm default-config`); the built-in 4-joint arm if
+    /// omitted.
+    #[arg(long, short = 'c')]
+    config: Option<PathBuf>,
+    /// The "real" arm: your belief of the real robot (other friction, noise, quantisation),
+    /// same joint count. Without it, the real arm is emulated from the arm (labelled so).
+    #[arg(long)]
+    real: Option<PathBuf>,
+    /// Output folder (absent, empty, or an earlier run's, which is replaced; through a
+    /// symbolic link, the folder it points to is replaced and the link stays).
+    #[arg(long, short = 'o', default_value = "out")]
+    output: PathBuf,
+    /// A reduced run (3⁴ gravity grid, coarse friction levels, one period of tracking).
+    #[arg(long)]
+    quick: bool,
+    /// Worker threads (default: the cores, at most 4).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Seed of the training runs and the random test configurations (default 1); the
+    /// simulations themselves are deterministic.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Centre of the task-space reference [m], x,y (default: (0.45 R, 0.10 R), R the reach).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    centre: Option<Vec<f64>>,
+    /// Scale of the reference, 1 = the paper's 0.4 m × 0.3 m (default: the reach in m).
+    #[arg(long)]
+    scale: Option<f64>,
+    /// Task-space gains K_p [1/s²], K_d [1/s] (default 1000,160).
+    #[arg(long, value_delimiter = ',')]
+    tracking_gains: Option<Vec<f64>>,
+    /// Joint-space loop gains K_p [N·m/rad], K_d [N·m·s/rad], taken as given (default: 50,2
+    /// scaled by the arm's gravity load relative to the built-in arm).
+    #[arg(long, value_delimiter = ',')]
+    joint_gains: Option<Vec<f64>>,
+    /// Measure gravity at this many poses (10 to 20 000) drawn over the whole turn (default:
+    /// the paper's 7ⁿ grid up to 4 joints, 7⁴ = 2401 sampled poses beyond).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(10..=20_000), conflicts_with = "gravity_grid")]
+    gravity_poses: Option<u64>,
+    /// Measure gravity on a kⁿ grid, k points per joint (at most 20 000 poses in all).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(2..=100))]
+    gravity_grid: Option<u64>,
+    /// How the gravity net sees the angles: link-angles (default: (cos, sin) of each link's
+    /// angle q₁+…+qⱼ, periodic), joint-angles ((cos, sin) of each joint angle, periodic) or
+    /// raw (the paper's net, not periodic; a periodic net's run also trains it for comparison).
+    #[arg(long, value_parser = parse_encoding)]
+    gravity_inputs: Option<InputEncoding>,
+    /// Also measure the gravity error against the number of poses (grids and sampled designs
+    /// up to N poses, every input encoding) for the report: adds minutes to a full run.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(30..=20_000))]
+    gravity_study: Option<u64>,
+    /// Average the gravity passes as measured (the paper's procedure) instead of first
+    /// taking the identified friction out of each.
+    #[arg(long)]
+    gravity_plain_average: bool,
+}
+
+/// Runs `neurarm paper`.
+pub fn run(args: PaperArgs) -> Result<()> {
+    use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
+    let PaperArgs {
+        config,
+        real,
+        output,
+        quick,
+        threads,
+        seed,
+        centre,
+        scale,
+        tracking_gains,
+        joint_gains,
+        gravity_poses,
+        gravity_grid,
+        gravity_inputs,
+        gravity_study,
+        gravity_plain_average,
+    } = args;
+    let mut settings = if quick { Settings::quick() } else { Settings::paper() };
+    if let Some(s) = seed {
+        settings.seed = s;
+    }
+    if let Some(t) = threads {
+        settings.threads = t.max(1);
+    }
+    if let Some(g) = tracking_gains {
+        let (kp, kd) = gain_pair("--tracking-gains", &g)?;
+        settings.tracking_gains.kp = kp;
+        settings.tracking_gains.kd = kd;
+    }
+    if let Some(poses) = gravity_poses {
+        settings.gravity_design = Some(GravityDesign::Sampled { poses: poses as usize });
+    }
+    if let Some(per_joint) = gravity_grid {
+        settings.gravity_design = Some(GravityDesign::Grid { per_joint: per_joint as usize });
+    }
+    if let Some(encoding) = gravity_inputs {
+        settings.gravity_encoding = encoding;
+    }
+    settings.gravity_friction_correction = !gravity_plain_average;
+    settings.gravity_study = gravity_study.map(|n| n as usize);
+    if let Some(g) = joint_gains {
+        (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", &g)?;
+        settings.scale_joint_gains = false;
+    }
+    let nominal = load_config(config.clone())?;
+    let real = match real {
+        Some(path) => Some((ArmConfig::from_toml_file(&path)?, path.display().to_string())),
+        None => None,
+    };
+    let placement = match (centre, scale) {
+        (None, None) => None,
+        (centre, scale) => {
+            let mut p = ReferencePlacement::for_arm(&nominal.arm);
+            if let Some(c) = centre {
+                let [x, y] = c[..] else { bail!("--centre takes two numbers, x,y [m]; got {}", c.len()) };
+                p.centre = nalgebra::Vector2::new(x, y);
+            }
+            if let Some(s) = scale {
+                p.scale = s;
+            }
+            Some(p)
+        }
+    };
+    let arm_name = config.map_or("the built-in arm".to_owned(), |c| c.display().to_string());
+    let arms = Arms::new(nominal, real, placement).map_err(|e| anyhow::anyhow!("{arm_name}: {e}"))?;
+    let run = run_paper(&output, &arms, &settings, &mut |line| eprintln!("[paper] {line}"))
+        .map_err(|e| anyhow::anyhow!("{e}\n(no run was written to {})", output.display()))?;
+    let t = &run.results.table_1;
+    let (m, q) = (&t.mse_m2, &t.ratios);
+    eprintln!(
+        "Table 1 MSE [m²]: sim perfect {:.3e}, NN {:.3e}, none {:.3e}; real NN {:.3e}, none {:.3e}\nratios: sim NN/perfect {:.3}, none/perfect {:.1}; real NN/none {:.3}",
+        m.sim_perfect, m.sim_nn, m.sim_none, m.real_nn, m.real_none, q.sim_nn_over_perfect, q.sim_none_over_perfect, q.real_nn_over_none
+    );
+    eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
+    Ok(())
+}
+
+/// Two positive gains from an option's values.
+fn gain_pair(option: &str, values: &[f64]) -> Result<(f64, f64)> {
+    let [kp, kd] = values[..] else { bail!("{option} takes two numbers, kp,kd; got {}", values.len()) };
+    if !(kp.is_finite() && kd.is_finite() && kp > 0.0 && kd >= 0.0) {
+        bail!("{option}: kp must be > 0 and kd >= 0 (got {kp}, {kd})");
+    }
+    Ok((kp, kd))
+}
