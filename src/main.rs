@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use cli::common::Interrupted;
-use cli::{compensator, default_config, eval, export, identify, paper, plan, simulate, train};
+use cli::{compensator, default_config, eval, export, identify, paper, plan, random_arm, simulate, train};
 
 #[derive(Parser)]
 #[command(
@@ -45,6 +45,11 @@ enum Command {
     Paper(paper::PaperArgs),
     /// Print the default arm configuration as TOML, a starting point for your own arm.
     DefaultConfig(default_config::DefaultConfigArgs),
+    /// Write the arm of the seeded random family (the arms the family test and
+    /// `scripts/bench-family` run): link lengths 0.1–1 m, masses, centres of mass and inertias
+    /// varied, a tilted or flat base, friction mixing Coulomb, viscous, Stribeck, asymmetric and
+    /// falling viscous laws. The same seed and joint count always give the same arm.
+    RandomArm(random_arm::RandomArmArgs),
     /// Write the paper's experiments as plans a robot's own controller can play (CSV with units in
     /// the header, and a .txt beside it that says how to run them).
     #[command(subcommand)]
@@ -73,6 +78,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Simulate(args) => simulate::run(args),
         Command::Paper(args) => paper::run(args),
         Command::DefaultConfig(args) => default_config::run(args),
+        Command::RandomArm(args) => random_arm::run(args),
         Command::Plan(command) => plan::run(command),
         Command::Identify(command) => identify::run(command),
         Command::Compensator(args) => compensator::run(args),

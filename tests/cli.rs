@@ -1,5 +1,7 @@
 //! `neurarm simulate` end to end: good input gives the library's trajectory to the bit; bad
 //! input gives an error naming file, line and column, and leaves no output file behind.
+//! `neurarm random-arm` gives one valid arm per seed and joint count, and refuses a count
+//! beyond 2 to 8.
 
 use std::path::{Path, PathBuf};
 
@@ -367,4 +369,43 @@ fn paper_measures_gravity_at_sampled_poses_over_the_whole_turn() {
     let e = neurarm().args(["paper", "--gravity-inputs", "polar", "-o"]).arg(dir.path().join("z")).assert().failure();
     let stderr = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
     assert!(stderr.contains("raw, joint_angles, link_angles"), "{stderr}");
+}
+
+/// `neurarm random-arm --seed SEED --joints JOINTS` to standard output: its TOML, asserting success.
+fn random_arm(seed: &str, joints: &str) -> String {
+    let o = neurarm().args(["random-arm", "--seed", seed, "--joints", joints]).output().unwrap();
+    assert!(o.status.success(), "random-arm --seed {seed} --joints {joints}: {}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8(o.stdout).unwrap()
+}
+
+#[test]
+fn random_arm_is_repeatable_valid_and_refuses_joint_counts_beyond_2_to_8() {
+    let text = random_arm("7", "4");
+    assert_eq!(random_arm("7", "4"), text, "the same seed and joint count gave another arm");
+    ArmConfig::from_toml_str(&text).unwrap_or_else(|e| panic!("not a valid arm: {e}\n{text}"));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("arm.toml");
+    neurarm().args(["random-arm", "--seed", "7", "--joints", "4", "-o"]).arg(&out).assert().success();
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), text, "-o FILE differs from standard output");
+    for joints in ["1", "9"] {
+        let bad = dir.path().join("bad.toml");
+        let e = neurarm().args(["random-arm", "--seed", "7", "--joints", joints, "-o"]).arg(&bad).assert().failure();
+        let stderr = String::from_utf8_lossy(&e.get_output().stderr).into_owned();
+        assert!(stderr.contains("--joints") && stderr.contains("2..=8"), "--joints {joints}: {stderr}");
+        assert!(!bad.exists(), "--joints {joints} left a file");
+    }
+}
+
+#[test]
+fn random_arm_follows_its_seed_and_joint_count() {
+    for joints in 2..=8 {
+        let (a, b) = (random_arm("1", &joints.to_string()), random_arm("2", &joints.to_string()));
+        assert_ne!(a, b, "seeds 1 and 2 gave the same {joints}-joint arm");
+        for text in [&a, &b] {
+            let table: toml::Table = toml::from_str(text).unwrap_or_else(|e| panic!("not TOML: {e}\n{text}"));
+            let links = table["arm"]["links"].as_array().map_or(0, Vec::len);
+            assert_eq!(links, joints, "a {joints}-joint arm with {links} links:\n{text}");
+            ArmConfig::from_toml_str(text).unwrap_or_else(|e| panic!("not a valid arm: {e}\n{text}"));
+        }
+    }
 }

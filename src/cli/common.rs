@@ -1,13 +1,15 @@
 //! What several commands share: argument groups (the arm and its initial state, a log's
-//! column names), loading a configuration, naming an FMU, training progress, the parser of
+//! column names), loading and writing a configuration, naming an FMU, training progress, the parser of
 //! input encodings, and the error of a run ended by Ctrl-C.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use neurarm::output::describe;
+use neurarm::table::write_text_atomic;
 use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::nn::InputEncoding;
@@ -84,6 +86,16 @@ pub fn load_config(path: Option<PathBuf>) -> Result<ArmConfig> {
         Some(path) => ArmConfig::from_toml_file(&path)?,
         None => ArmConfig::default(),
     })
+}
+
+/// Writes `config` as TOML to `output` (`-`: standard output) as every `-o` is written, and says
+/// where unless it went to standard output.
+pub fn write_config(output: &Path, config: &ArmConfig) -> Result<()> {
+    write_text_atomic(output, &config.to_toml_string()).with_context(|| format!("writing {}", describe(output)))?;
+    if !neurarm::output::is_stdout(output) {
+        eprintln!("wrote {}", output.display());
+    }
+    Ok(())
 }
 
 /// The model identifier: as given, or the output file's name.

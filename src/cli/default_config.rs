@@ -3,11 +3,11 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use neurarm::output::describe;
-use neurarm::table::write_text_atomic;
 use neurarm_physics::config::ArmConfig;
+
+use super::common::write_config;
 
 /// The arguments of `neurarm default-config`. Its help text is the doc of `Command::DefaultConfig` in
 /// main.rs, which clap shows instead of this one.
@@ -20,10 +20,5 @@ pub struct DefaultConfigArgs {
 
 /// Runs `neurarm default-config`.
 pub fn run(args: DefaultConfigArgs) -> Result<()> {
-    let DefaultConfigArgs { output } = args;
-    write_text_atomic(&output, &ArmConfig::default().to_toml_string()).with_context(|| format!("writing {}", describe(&output)))?;
-    if !neurarm::output::is_stdout(&output) {
-        eprintln!("wrote {}", output.display());
-    }
-    Ok(())
+    write_config(&args.output, &ArmConfig::default())
 }

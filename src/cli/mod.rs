@@ -10,5 +10,6 @@ pub mod export;
 pub mod identify;
 pub mod paper;
 pub mod plan;
+pub mod random_arm;
 pub mod simulate;
 pub mod train;
