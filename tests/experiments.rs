@@ -7,7 +7,9 @@ use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
 use std::path::Path;
 
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::nn::WeightsFile;
+
+#[path = "support/quality.rs"]
+mod quality;
 
 #[test]
 fn the_quick_paper_run_reproduces_the_papers_findings() {
@@ -139,46 +141,7 @@ fn check_quality(out: &Path, config: &ArmConfig, joints: usize) {
     assert!(real_nn / real_none <= 0.3, "{joints} joints: real NN/none {}", real_nn / real_none);
 
     let real: ArmConfig = serde_json::from_value(json["setup"]["real"].clone()).unwrap();
-    for joint in 0..joints {
-        let law = config.arm.friction[joint];
-        let text = std::fs::read_to_string(out.join(format!("data/friction_sim_joint{}.csv", joint + 1))).unwrap();
-        let (mut worst, mut fastest, mut slowest) = (0.0f64, [0.0f64; 2], [f64::INFINITY; 2]);
-        for line in text.lines().skip(1) {
-            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-            if v[0] == 0.0 {
-                continue; // the pair at rest: friction there is anything between the breakaway torques
-            }
-            worst = worst.max((v[1] - law.torque(v[0])).abs());
-            let side = usize::from(v[0] < 0.0);
-            fastest[side] = fastest[side].max(v[0].abs());
-            slowest[side] = slowest[side].min(v[0].abs());
-        }
-        eprintln!(
-            "{joints} joints, joint {}: pairs within {worst:.1e} N·m of the law, speeds {slowest:.2?}–{fastest:.2?} rad/s",
-            joint + 1
-        );
-        assert!(worst < 0.02, "{joints} joints, joint {}: identified friction off the law by {worst} N·m", joint + 1);
-        assert!(
-            fastest.iter().all(|&f| f >= 4.9) && slowest.iter().all(|&s| s <= 0.2),
-            "joint {}: speeds {slowest:?}–{fastest:?}",
-            joint + 1
-        );
-        for (tag, arm) in [("sim", config), ("real", &real)] {
-            let net = WeightsFile::read(&out.join(format!("nets/friction_{tag}_joint{}.json", joint + 1))).unwrap().network().unwrap();
-            let law = arm.arm.friction[joint];
-            let (mut sq, mut count, mut largest) = (0.0, 0, 0.0f64);
-            for k in 0..=4800 {
-                for sign in [1.0, -1.0] {
-                    let v = sign * (0.2 + k as f64 * 1e-3);
-                    sq += (net.evaluate(&[v])[0] - law.torque(v)).powi(2);
-                    largest = largest.max(law.torque(v).abs());
-                    count += 1;
-                }
-            }
-            let share = (sq / count as f64).sqrt() / largest;
-            assert!(share < 0.02, "{joints} joints, {tag} joint {}: net off the law by {:.2} % of {largest} N·m", joint + 1, 100.0 * share);
-        }
-    }
+    quality::check_friction(out, config, &real, Some(0.02));
 }
 
 /// The whole pipeline on the example 3-joint arm (Stribeck, asymmetric and falling-viscous
@@ -201,45 +164,12 @@ fn the_quick_paper_run_holds_for_a_three_and_a_six_joint_arm() {
         assert!(g.pair_error_nm < 0.01, "{joints} joints: gravity pairs off by up to {} N·m", g.pair_error_nm);
         assert!(g.pair_error_uncorrected_nm > 10.0 * g.pair_error_nm, "{joints} joints: the correction matters here");
         check_quality(out.path(), &config, joints);
-        let (rms, max) = gravity_whole_turn(out.path(), &config);
+        let (rms, max) = quality::gravity_whole_turn(out.path(), &config);
         if joints == 3 {
             assert!(rms.iter().all(|&e| e < 0.01), "3 joints: whole-turn RMS {rms:?} of each joint's largest gravity torque");
             assert!(max.iter().all(|&e| e < 0.05), "3 joints: whole-turn largest error {max:?} of each joint's largest gravity torque");
         }
     }
-}
-
-/// The written gravity net of the run in `out` on the arm `config`: it is 2π-periodic in every
-/// angle (to 1e-12 N·m), and its RMS and largest error against the arm's gravity (base turned
-/// 90°) over 2000 random poses in [0, 2π)ⁿ, per joint as shares of the joint's own largest
-/// torque.
-fn gravity_whole_turn(out: &Path, config: &ArmConfig) -> (Vec<f64>, Vec<f64>) {
-    use neurarm_physics::arm::gravity_torques;
-    use rand::{Rng, SeedableRng};
-    let n = config.arm.dof();
-    let net = WeightsFile::read(&out.join("nets/gravity.json")).unwrap().network().unwrap();
-    let vertical = config.arm.clone().with_base_angle(std::f64::consts::FRAC_PI_2);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2024);
-    let (mut sq, mut max, mut largest) = (vec![0.0; n], vec![0.0f64; n], vec![0.0f64; n]);
-    let poses = 2000;
-    for _ in 0..poses {
-        let q: Vec<f64> = (0..n).map(|_| rng.gen::<f64>() * std::f64::consts::TAU).collect();
-        let (guess, truth) = (net.evaluate(&q), gravity_torques(&vertical, &q));
-        for i in 0..n {
-            let mut turned = q.clone();
-            turned[i] += std::f64::consts::TAU * if rng.gen::<bool>() { 1.0 } else { -3.0 };
-            let again = net.evaluate(&turned);
-            assert!(again.iter().zip(&guess).all(|(a, b)| (a - b).abs() <= 1e-12), "not periodic in q_{}: {again:?} vs {guess:?}", i + 1);
-            let e = guess[i] - truth[i];
-            sq[i] += e * e;
-            max[i] = max[i].max(e.abs());
-            largest[i] = largest[i].max(truth[i].abs());
-        }
-    }
-    let rms: Vec<f64> = (0..n).map(|i| (sq[i] / poses as f64).sqrt() / largest[i]).collect();
-    let max: Vec<f64> = (0..n).map(|i| max[i] / largest[i]).collect();
-    eprintln!("{n} joints, gravity net over the whole turn: RMS {rms:.4?}, largest {max:.4?} of each joint's largest torque");
-    (rms, max)
 }
 
 /// The gravity identification at the paper's size (7⁴ grid, built-in arm; its friction is

@@ -1,0 +1,82 @@
+//! The whole pipeline of `neurarm paper` (quick runs, 200 sampled gravity poses) on arms of the
+//! seeded random family (`neurarm_physics::family`, `neurarm random-arm`): two seeds for every
+//! joint count from 2 to 8, arms nobody tuned the pipeline on. Asserted, against each arm's own
+//! friction law computed here: every run finishes (the reference is placed, or fitted into the
+//! ring of an arm with a hole in its workspace; identification, training and every loop run);
+//! every identified friction pair lies within 0.02 N·m of the law and the pairs span 0.2 to 4.9
+//! rad/s both ways.
+//!
+//! Printed, not asserted, because on some of these arms they miss issue 24's targets (open; see
+//! its notes and `scripts/bench-family`): sim NN/perfect (target ≤ 1.10), none/perfect (≥ 5),
+//! real NN/none (≤ 0.3), the friction nets' error (2 % on the example arms), the gravity net's
+//! whole-turn error (a quick run's 200 poses are not the full run's design) and the joint
+//! loop's NN/ideal (≤ 1.5).
+//! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
+
+use std::sync::Mutex;
+
+use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
+use neurarm_physics::config::ArmConfig;
+use neurarm_physics::family::{random_arm, FAMILY_MAX_JOINTS, FAMILY_MIN_JOINTS};
+
+#[path = "support/quality.rs"]
+mod quality;
+
+/// Seeds of the family arms run here, for every joint count.
+const SEEDS: [u64; 2] = [1, 2];
+
+#[test]
+fn the_quick_paper_run_holds_on_the_random_family_of_arms() {
+    let cases: Vec<(u64, usize)> = (FAMILY_MIN_JOINTS..=FAMILY_MAX_JOINTS).flat_map(|j| SEEDS.iter().map(move |&s| (s, j))).collect();
+    let next = Mutex::new(cases.into_iter());
+    let rows = Mutex::new(Vec::new());
+    let failures = Mutex::new(Vec::new());
+    // Two arms at a time, one thread each: the machine's two cores.
+    std::thread::scope(|scope| {
+        for _ in 0..2 {
+            scope.spawn(|| loop {
+                let Some((seed, joints)) = next.lock().unwrap().next() else { break };
+                match std::panic::catch_unwind(|| run_one(seed, joints)) {
+                    Ok(row) => rows.lock().unwrap().push(row),
+                    Err(e) => {
+                        let why = e.downcast_ref::<String>().cloned().or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()));
+                        failures.lock().unwrap().push(format!("seed {seed}, {joints} joints: {}", why.unwrap_or_default()));
+                    }
+                }
+            });
+        }
+    });
+    let mut rows = rows.into_inner().unwrap();
+    rows.sort_by_key(|r: &String| r.clone());
+    eprintln!("seed joints | sim NN/perfect none/perfect real NN/none | worst friction net sim, real | gravity RMS, largest (quick) | joint NN/ideal");
+    for r in &rows {
+        eprintln!("{r}");
+    }
+    let failures = failures.into_inner().unwrap();
+    assert!(failures.is_empty(), "{} of {} family arms failed:\n{}", failures.len(), rows.len() + failures.len(), failures.join("\n"));
+}
+
+/// One family arm's quick run and checks; a row of its figures.
+fn run_one(seed: u64, joints: usize) -> String {
+    let config = random_arm(seed, joints);
+    let out = tempfile::tempdir().unwrap();
+    let settings = Settings { gravity_design: Some(GravityDesign::Sampled { poses: 200 }), threads: 1, ..Settings::quick() };
+    let arms = Arms::new(config.clone(), None, None).unwrap_or_else(|e| panic!("the arm is refused: {e}"));
+    let run = run_paper(out.path(), &arms, &settings, &mut |_| {}).unwrap_or_else(|e| panic!("the run fails: {e}"));
+    let r = &run.results;
+    assert_eq!(r.setup.joints, joints);
+    let real: ArmConfig = r.setup.real.clone();
+    let (worst_net, worst_real_net) = quality::check_friction(out.path(), &config, &real, None);
+    let t = r.table_1.mse_m2.to_array();
+    let (nn_perfect, none_perfect, real_nn_none) = (t[1] / t[0], t[2] / t[0], t[3] / t[4]);
+    let (rms, max) = quality::gravity_whole_turn(out.path(), &config);
+    let settled = &r.joint_loop.settled_rad;
+    let joint_ratio = settled[1].iter().zip(&settled[0]).map(|(nn, ideal)| nn / ideal).fold(0.0, f64::max);
+    format!(
+        "{seed:4} {joints:6} | {nn_perfect:14.3} {none_perfect:12.1} {real_nn_none:12.3} | {:.2} %, real {:.2} % | {:.2} %, {:.2} % | {joint_ratio:.2}",
+        100.0 * worst_net,
+        100.0 * worst_real_net,
+        100.0 * rms.iter().cloned().fold(0.0, f64::max),
+        100.0 * max.iter().cloned().fold(0.0, f64::max),
+    )
+}
