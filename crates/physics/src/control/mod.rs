@@ -365,13 +365,22 @@ pub fn task_space_acceleration_into(
     d.pseudo_inverse.mul_to(&d.jacobian, &mut d.pinv_j);
     d.null_projector.fill_with_identity();
     d.null_projector -= &d.pinv_j;
-    for i in 0..q.len() {
-        let home = if d.has_rest_pose { gains.null_stiffness * wrapped_angle(d.rest_pose[i] - q[i]) } else { 0.0 };
-        d.null_target[i] = home - gains.null_damping * qd[i];
-    }
-    d.null_projector.mul_to(&d.null_target, &mut d.null_motion);
-    for ((u, t), m) in d.u.iter_mut().zip(d.task.iter()).zip(d.null_motion.iter()) {
-        *u = t + m;
+    if d.has_rest_pose && gains.null_stiffness != 0.0 {
+        for i in 0..q.len() {
+            d.null_target[i] = gains.null_stiffness * wrapped_angle(d.rest_pose[i] - q[i]) - gains.null_damping * qd[i];
+        }
+        d.null_projector.mul_to(&d.null_target, &mut d.null_motion);
+        for ((u, t), m) in d.u.iter_mut().zip(d.task.iter()).zip(d.null_motion.iter()) {
+            *u = t + m;
+        }
+    } else {
+        // Damping only, computed as −k (N q̇) rather than N (−k q̇): the same in exact
+        // arithmetic, and the rounding the long closed loops were measured with (they are
+        // sensitive to it, see issue 24's notes).
+        d.null_projector.mul_to(&d.qd, &mut d.null_motion);
+        for ((u, t), m) in d.u.iter_mut().zip(d.task.iter()).zip(d.null_motion.iter()) {
+            *u = t - gains.null_damping * m;
+        }
     }
     d.u.iter().all(|u| u.is_finite())
 }
