@@ -70,6 +70,19 @@ pub struct PaperArgs {
     /// taking the identified friction out of each.
     #[arg(long)]
     gravity_plain_average: bool,
+    /// Top speed of the friction runs [rad/s] (default: the paper's 5): the friction nets are
+    /// trained and judged up to it; lower it for a joint that cannot reach 5 rad/s.
+    #[arg(long, value_name = "RAD_S", value_parser = parse_top_speed)]
+    friction_max_speed: Option<f64>,
+}
+
+/// A friction top speed: 0.5 to 50 rad/s.
+fn parse_top_speed(text: &str) -> Result<f64, String> {
+    let v: f64 = text.parse().map_err(|e| format!("{text:?} is not a number: {e}"))?;
+    if !(0.5..=50.0).contains(&v) {
+        return Err(format!("{v} rad/s is outside 0.5 to 50 rad/s"));
+    }
+    Ok(v)
 }
 
 /// Runs `neurarm paper`.
@@ -91,6 +104,7 @@ pub fn run(args: PaperArgs) -> Result<()> {
         gravity_inputs,
         gravity_study,
         gravity_plain_average,
+        friction_max_speed,
     } = args;
     let mut settings = if quick { Settings::quick() } else { Settings::paper() };
     if let Some(s) = seed {
@@ -114,6 +128,9 @@ pub fn run(args: PaperArgs) -> Result<()> {
         settings.gravity_encoding = encoding;
     }
     settings.gravity_friction_correction = !gravity_plain_average;
+    if let Some(v) = friction_max_speed {
+        settings.max_velocity = v;
+    }
     settings.gravity_study = gravity_study.map(|n| n as usize);
     if let Some(g) = joint_gains {
         (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", &g)?;

@@ -231,6 +231,10 @@ pub fn friction_run(
     let options = run_options(settings, rigid.then_some(inertia));
     let keep_s = options.window_s + 2.0 * settings.step;
     let mut run = FrictionRun { joint, ..Default::default() };
+    // A joint that never reaches the top speed stops the run: at most twice the torque its
+    // motor must give to carry the stretched arm (at least 100 N·m), so heavy arms' joints
+    // are not cut off below their own friction.
+    let torque_cap = (2.0 * model.gravity_load_nm(joint)).max(100.0);
     let mut tau = 0.0;
     let mut increment: f64 = 0.02;
     // (torque, mean speed) of the levels that moved the joint.
@@ -291,8 +295,13 @@ pub fn friction_run(
         if !overshot && mean * direction >= settings.max_velocity {
             break;
         }
-        if tau.abs() > 100.0 {
-            return Err(format!("joint {}: no speed of {} rad/s below 100 N·m", joint + 1, settings.max_velocity));
+        if tau.abs() > torque_cap {
+            return Err(format!(
+                "joint {}: no speed of {} rad/s below {torque_cap:.0} N·m (the larger of 100 N·m and twice the joint's \
+                 gravity load); lower the runs' top speed (`neurarm paper --friction-max-speed`) if the joint cannot reach it",
+                joint + 1,
+                settings.max_velocity
+            ));
         }
     }
     // Below the first moving level's speed constant torques cannot hold the joint: where

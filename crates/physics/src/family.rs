@@ -77,15 +77,9 @@ pub fn random_arm_with_traits(seed: u64, joints: usize) -> (ArmConfig, FamilyTra
     let base_angle_rad = if rng.gen_bool(1.0 / 3.0) { 0.0 } else { round(rng.gen_range(0.05..1.2), 4) };
     let mut traits = FamilyTraits { inertia_from_geometry, stribeck: Vec::new(), asymmetric: Vec::new(), falling_viscous: Vec::new() };
     let mut friction = Vec::with_capacity(joints);
+    let loads = ArmParams { links: links.clone(), friction: Vec::new(), gravity_m_s2: GRAVITY_M_S2, base_angle_rad: 0.0 };
     for j in 0..joints {
-        // The largest gravity torque joint j carries: every outboard link stretched out.
-        let mut reach_before = 0.0;
-        let mut load = 0.0;
-        for link in &links[j..] {
-            load += link.mass_kg * (reach_before + link.com_m);
-            reach_before += link.length_m;
-        }
-        let load_nm = GRAVITY_M_S2 * load;
+        let load_nm = loads.gravity_load_nm(j);
         let coulomb = 0.05 + rng.gen_range(0.02..0.12) * load_nm;
         let viscous = coulomb * rng.gen_range(0.15..1.0);
         let stribeck = rng.gen_bool(0.5);

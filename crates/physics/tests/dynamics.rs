@@ -254,3 +254,21 @@ fn energy_is_conserved_under_gravity() {
     let drift = energy_drift(&arm, &start, 2.5e-4);
     assert!(drift < 1e-6, "drift {drift:e} J");
 }
+
+/// The gravity load of a joint is the gravity torque of the arm stretched out level (q = 0)
+/// with the base turned 90°, where the plane carries the full g.
+#[test]
+fn gravity_load_is_the_level_stretched_arms_gravity_torque() {
+    let mut rng = ChaCha8Rng::seed_from_u64(19);
+    for n in 1..=8 {
+        let mut arm = random_arm(&mut rng, n);
+        for link in &mut arm.links {
+            link.com_m = link.com_m.abs();
+        }
+        let level = gravity_torques(&arm.clone().with_base_angle(std::f64::consts::FRAC_PI_2), &vec![0.0; n]);
+        for j in 0..n {
+            let load = arm.gravity_load_nm(j);
+            assert!((load - level[j]).abs() <= 1e-12 * load, "{n} joints, joint {j}: {load} vs {}", level[j]);
+        }
+    }
+}

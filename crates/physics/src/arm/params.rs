@@ -194,6 +194,20 @@ impl ArmParams {
         self.links.len()
     }
 
+    /// The gravity torque joint `joint` (0-based) carries with every outboard link stretched out
+    /// level under the full `gravity_m_s2`, whatever the base tilt [N·m]: the largest it can
+    /// carry when no centre of mass lies behind its joint. A scale for the torques the joint's
+    /// motor must be able to give.
+    pub fn gravity_load_nm(&self, joint: usize) -> f64 {
+        let mut reach_before = 0.0;
+        let mut moment = 0.0;
+        for link in &self.links[joint..] {
+            moment += link.mass_kg * (reach_before + link.com_m);
+            reach_before += link.length_m;
+        }
+        self.gravity_m_s2 * moment.abs()
+    }
+
     /// Gravitational acceleration in the plane of motion, along −y [m/s²].
     pub fn in_plane_gravity(&self) -> f64 {
         self.gravity_m_s2 * self.base_angle_rad.sin()
