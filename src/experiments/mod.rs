@@ -386,9 +386,15 @@ mod tests {
     #[test]
     fn arms_of_more_than_four_joints_get_as_many_sampled_poses_as_the_four_joint_grid() {
         let paper = Settings::paper();
-        for n in 2..=4 {
+        for n in 3..=4 {
             assert_eq!(paper.design_for(n), GravityDesign::Grid { per_joint: 7 });
         }
+        // 7² = 49 poses, 98 torques, would not determine the 177 weights of a 2-joint net.
+        assert_eq!(paper.fewest_gravity_poses(2), 177);
+        assert_eq!(paper.design_for(2), GravityDesign::Grid { per_joint: 14 });
+        let raw = Settings { gravity_encoding: neurarm_physics::nn::InputEncoding::Raw, ..Settings::paper() };
+        assert_eq!(raw.fewest_gravity_poses(2), 127);
+        assert_eq!(raw.design_for(2), GravityDesign::Grid { per_joint: 12 });
         for n in 5..=8 {
             assert_eq!(paper.design_for(n), GravityDesign::Sampled { poses: 2401 });
         }
