@@ -74,6 +74,21 @@ pub struct PaperArgs {
     /// trained and judged up to it; lower it for a joint that cannot reach 5 rad/s.
     #[arg(long, value_name = "RAD_S", value_parser = parse_top_speed)]
     friction_max_speed: Option<f64>,
+    /// Feed the task-space loops' compensators (perfect, NN, adaptive alike) the speed the
+    /// controller commands H seconds ahead, q̇ + H u (`qd_intended_i` of the controller FMU),
+    /// instead of the measured speed (the paper's), so joints at rest are compensated the way
+    /// the law moves them; e.g. 0.01. Default: the measured speed.
+    #[arg(long, value_name = "H", value_parser = parse_horizon)]
+    intent_horizon: Option<f64>,
+}
+
+/// A look-ahead horizon: 0 to 1 s.
+fn parse_horizon(text: &str) -> Result<f64, String> {
+    let v: f64 = text.parse().map_err(|e| format!("{text:?} is not a number: {e}"))?;
+    if !(0.0..=1.0).contains(&v) {
+        return Err(format!("{v} s is outside 0 to 1 s"));
+    }
+    Ok(v)
 }
 
 /// A friction top speed: 0.5 to 50 rad/s.
@@ -105,6 +120,7 @@ pub fn run(args: PaperArgs) -> Result<()> {
         gravity_study,
         gravity_plain_average,
         friction_max_speed,
+        intent_horizon,
     } = args;
     let mut settings = if quick { Settings::quick() } else { Settings::paper() };
     if let Some(s) = seed {
@@ -128,6 +144,7 @@ pub fn run(args: PaperArgs) -> Result<()> {
         settings.gravity_encoding = encoding;
     }
     settings.gravity_friction_correction = !gravity_plain_average;
+    settings.intent_horizon = intent_horizon;
     if let Some(v) = friction_max_speed {
         settings.max_velocity = v;
     }

@@ -50,6 +50,11 @@ pub struct Settings {
     /// Gains of the task-space controller (acceleration level, so they need no scaling with
     /// the arm).
     pub tracking_gains: TaskSpaceGains,
+    /// Look-ahead [s] of the speed the task-space loops' compensators are fed: with `Some(h)`
+    /// they get the controller's `qd_intended = q̇ + h u` (u the commanded joint
+    /// acceleration) instead of the measured q̇, so a joint at rest is compensated the way
+    /// the law accelerates it; `None` (default) is the paper's measured speed.
+    pub intent_horizon: Option<f64>,
     /// Random configurations the gravity net is tested on.
     pub gravity_test_points: usize,
     /// Epochs of the gravity net's training.
@@ -96,6 +101,7 @@ impl Settings {
             joint_kd: 2.0,
             scale_joint_gains: true,
             seed: 1,
+            intent_horizon: None,
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()).min(4),
             quick: false,
             adaptation: super::adaptation::AdaptationSettings::full(),

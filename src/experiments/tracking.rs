@@ -31,7 +31,9 @@ pub fn tracking_start(arm: &ArmParams, placement: &ReferencePlacement) -> Result
 
 /// The task-space tracking loop of Table 1 as a system: the arm in `arm` started at `start`
 /// ([`tracking_start`]), the task-space controller, and the compensator FMU if any, for
-/// `settings.tracking_duration` at `settings.step`. FMU paths are taken as given (relative to
+/// `settings.tracking_duration` at `settings.step`. With `settings.intent_horizon` the
+/// compensator's speed inputs come from the controller's `qd_intended_i` (see
+/// [`Settings::intent_horizon`]) instead of the arm's measured speeds. FMU paths are taken as given (relative to
 /// where the system file will be, or absolute).
 pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>, start: &ArmState, settings: &Settings) -> SystemSpec {
     let n = start.q.len();
@@ -40,7 +42,18 @@ pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>
         arm_parameters.insert(format!("q0_{}", i + 1), Value::Real(start.q[i]));
         arm_parameters.insert(format!("qd0_{}", i + 1), Value::Real(start.qd[i]));
     }
-    let mut spec = closed_loop(arm, controller, compensator, arm_parameters, BTreeMap::new());
+    let mut controller_parameters = BTreeMap::new();
+    let mut spec = match (settings.intent_horizon, compensator) {
+        (Some(horizon), Some(_)) => {
+            controller_parameters.insert("intent_horizon".to_owned(), Value::Real(horizon));
+            let mut spec = closed_loop(arm, controller, compensator, arm_parameters, controller_parameters);
+            for c in spec.connection.iter_mut().filter(|c| c.to == "comp.qd_*") {
+                c.from = "ctl.qd_intended_*".into();
+            }
+            spec
+        }
+        _ => closed_loop(arm, controller, compensator, arm_parameters, controller_parameters),
+    };
     let mut record: Vec<String> =
         ["ctl.error_x", "ctl.error_y", "ctl.x_ref", "ctl.y_ref", "arm.x", "arm.y"].iter().map(|s| s.to_string()).collect();
     record.extend((1..=n).map(|i| format!("arm.q_{i}")));

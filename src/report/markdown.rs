@@ -138,6 +138,17 @@ pub fn report_markdown(run: &PaperRun) -> String {
             " (as given)".to_owned()
         }
     );
+    let _ = writeln!(
+        s,
+        "{}\n",
+        match settings.intent_horizon {
+            None => "The task-space loops' compensators are fed the measured joint speeds (the paper's).".to_owned(),
+            Some(h) => format!(
+                "The task-space loops' compensators are fed the speed the controller commands {h} s ahead, q̇ + {h} u (`--intent-horizon`), \
+                 not the measured one, so a joint at rest is compensated the way the law moves it."
+            ),
+        }
+    );
 
     let _ = writeln!(s, "## Table 1: tracking error of the task-space loop\n");
     let _ = writeln!(

@@ -18,8 +18,9 @@ use neurarm_physics::control::{
 use serde::{Deserialize, Serialize};
 
 use crate::ports::ControllerInputs;
-use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN};
+use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN, RADIAN_PER_SECOND};
 use crate::{describe, per_joint, BuildError, ModelKind};
+use fmi2_export::Unit;
 
 /// Default λ of the learning signal [1/s]: the position error's weight, between 0 and the
 /// paper's K_d = 160 (the Lyapunov argument needs 0 < λ < K_d).
@@ -81,6 +82,8 @@ pub struct TaskSpaceControllerModel {
     scale: RealVar,
     signal: Vec<RealVar>,
     lambda: RealVar,
+    intended_speed: Vec<RealVar>,
+    intent_horizon: RealVar,
     data: TaskSpaceData,
     learning: LearningSignalData,
     /// Inputs as read: angles, velocities, compensation; and the torques.
@@ -126,6 +129,19 @@ impl TaskSpaceControllerModel {
                 &q_and_qd,
             )
         });
+        let intended_speed = per_joint(&mut b, n, |b, i| {
+            b.output(
+                format!("qd_intended_{}", i + 1),
+                RADIAN_PER_SECOND,
+                format!(
+                    "Speed joint {} is commanded towards: qd_{} + intent_horizon · u_{} (u the law's joint acceleration)",
+                    i + 1,
+                    i + 1,
+                    i + 1
+                ),
+                &q_and_qd,
+            )
+        });
         let reference = [b.output("x_ref", METRE, "Reference x_d(t)", &[]), b.output("y_ref", METRE, "Reference y_d(t)", &[])];
         let error = [b.output("error_x", METRE, "Tracking error x_d − x", &q), b.output("error_y", METRE, "Tracking error y_d − y", &q)];
         let kp = b.tunable("kp", PER_SECOND_SQUARED, gains.kp, "Position gain K_p");
@@ -156,6 +172,12 @@ impl TaskSpaceControllerModel {
             DEFAULT_TASK_LAMBDA,
             "Weight of the position error in the learning signal, lambda (between 0 and kd)",
         );
+        let intent_horizon = b.tunable(
+            "intent_horizon",
+            Unit::SECOND,
+            0.0,
+            "Look-ahead of qd_intended [s]: a friction compensator fed qd_intended instead of the measured speed pushes a joint at rest the way the law accelerates it (0: qd_intended = qd)",
+        );
         let centre = [
             b.parameter("centre_x", METRE, centre[0], "x of the reference's centre"),
             b.parameter("centre_y", METRE, centre[1], "y of the reference's centre"),
@@ -183,6 +205,8 @@ impl TaskSpaceControllerModel {
             scale,
             signal,
             lambda,
+            intended_speed,
+            intent_horizon,
             data,
             learning,
             buf: std::array::from_fn(|_| vec![0.0; n]),
@@ -227,6 +251,11 @@ impl StaticModel for TaskSpaceControllerModel {
             return Err(ModelError::msg(format!("no control law at t = {time} s: the inputs q = {q:?}, qd = {qd:?} are not finite")));
         }
         values.write_reals(&self.tau, tau);
+        let horizon = values[self.intent_horizon];
+        for ((v, w), u) in tau.iter_mut().zip(qd.iter()).zip(self.data.acceleration()) {
+            *v = w + horizon * u;
+        }
+        values.write_reals(&self.intended_speed, tau);
         // The torque buffer is written: reuse the compensation buffer for the signal.
         if !task_learning_signal_into(&self.model, &mut self.learning, q, qd, &reference, values[self.lambda], comp) {
             return Err(ModelError::msg(format!(
