@@ -5,7 +5,9 @@ seeds cover 2 to 8 joints. Each arm's run writes results.json; the table takes i
 there (nothing is recomputed here) and marks each target met or missed:
 sim NN/perfect <= 1.10, none/perfect >= 5 (else: "little friction", reported, not a miss),
 real NN/none <= 0.3, gravity whole-turn RMS < 1 % and largest < 5 % of each joint's largest
-torque, joint-loop NN settled error <= 1.5 x ideal on every joint.
+torque, joint-loop NN settled error <= 1.5 x ideal on every joint. Beside them: the share of the
+perfect-compensation tracking run's samples with a joint at rest (stick-slip), and real NN/none
+against the true positions (the measured one carries the emulated encoders' noise).
 """
 
 import argparse
@@ -31,17 +33,24 @@ def joints_of(seed):
     return 2 + (seed - 1) % 7
 
 
+def paths(out, seed):
+    name = f"seed{seed:02d}_j{joints_of(seed)}"
+    return (os.path.join(out, "arms", name + ".toml"), os.path.join(out, "runs", name), os.path.join(out, "runs", name + ".log"))
+
+
 def run_arm(neurarm, out, seed, extra):
-    joints = joints_of(seed)
-    name = f"seed{seed:02d}_j{joints}"
-    config = os.path.join(out, "arms", name + ".toml")
-    run_dir = os.path.join(out, "runs", name)
-    log = os.path.join(out, "runs", name + ".log")
-    subprocess.run([neurarm, "random-arm", "--seed", str(seed), "--joints", str(joints), "-o", config], check=True)
+    config, run_dir, log = paths(out, seed)
+    subprocess.run([neurarm, "random-arm", "--seed", str(seed), "--joints", str(joints_of(seed)), "-o", config], check=True)
     started = time.monotonic()
     with open(log, "w") as f:
         rc = subprocess.run([neurarm, "paper", "-c", config, "-o", run_dir, "--threads", "1", *extra], stdout=f, stderr=subprocess.STDOUT).returncode
-    row = {"seed": seed, "joints": joints, "arm": config, "wall_s": time.monotonic() - started, "exit_code": rc}
+    return read_row(out, seed, time.monotonic() - started, rc)
+
+
+def read_row(out, seed, wall_s, rc):
+    """The figures of arm `seed`'s run from its results.json (or its log's last line if it failed)."""
+    config, run_dir, log = paths(out, seed)
+    row = {"seed": seed, "joints": joints_of(seed), "arm": config, "wall_s": wall_s, "exit_code": rc}
     if rc != 0:
         with open(log) as f:
             lines = [l.strip() for l in f if l.strip()]
@@ -53,6 +62,10 @@ def run_arm(neurarm, out, seed, extra):
     row["sim_nn_over_perfect"] = ratios["sim_nn_over_perfect"]
     row["sim_none_over_perfect"] = ratios["sim_none_over_perfect"]
     row["real_nn_over_none"] = ratios["real_nn_over_none"]
+    true = r["table_1"]["true_mse_m2"]
+    # Against the true positions: the measured MSE carries the emulated encoders' noise, the
+    # same floor under both cases.
+    row["real_nn_over_none_true"] = true["real_nn"] / true["real_none"]
     row["worst_friction_net_share"] = max(f["net_error_share"] for f in r["friction"])
     whole = r["gravity"]["net"]["whole_turn"]
     row["gravity_rms_share"] = max(whole["rms_share"])
@@ -60,7 +73,24 @@ def run_arm(neurarm, out, seed, extra):
     settled = r["joint_loop"]["settled_rad"]
     row["joint_nn_over_ideal"] = max(nn / ideal if ideal > 0 else math.inf for ideal, nn in zip(settled[0], settled[1]))
     row["run_s"] = r["total_s"]
+    # Share of the perfect-compensation run's samples with a joint at rest: stick-slip, which
+    # the report flags and which makes NN/perfect a comparison of two stick-slip motions.
+    row["perfect_resting_share"] = r["table_1"].get("resting_share", {}).get("sim_perfect")
+    if row["perfect_resting_share"] is None:
+        row["perfect_resting_share"] = resting_share(os.path.join(run_dir, "data", "tracking_sim_perfect.csv"))
     return row
+
+
+def resting_share(path):
+    """Share of a tracking CSV's rows with some |arm_qd_i| < 1 mrad/s (runs written before
+    results.json carried it)."""
+    import csv
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    speeds = [c for c in (rows[0] if rows else {}) if c.startswith("arm_qd_")]
+    if not rows or not speeds:
+        return None
+    return sum(1 for r in rows if any(abs(float(r[c])) < 1e-3 for c in speeds)) / len(rows)
 
 
 def verdicts(row):
@@ -72,7 +102,10 @@ def verdicts(row):
         missed.append("sim NN/perfect")
     little_friction = row["sim_none_over_perfect"] < TARGETS["sim_none_over_perfect"]
     if row["real_nn_over_none"] > TARGETS["real_nn_over_none"]:
-        missed.append("real NN/none")
+        if row["real_nn_over_none_true"] <= TARGETS["real_nn_over_none"]:
+            missed.append("real NN/none (met on the true positions: the measured error's noise floor)")
+        else:
+            missed.append("real NN/none")
     if row["gravity_rms_share"] >= TARGETS["gravity_rms_share"]:
         missed.append("gravity RMS")
     if row["gravity_max_share"] >= TARGETS["gravity_max_share"]:
@@ -83,21 +116,23 @@ def verdicts(row):
 
 
 def table(rows):
-    head = ("| seed | joints | sim NN/perfect | none/perfect | real NN/none | worst friction net | gravity RMS | gravity largest | joint NN/ideal | time [s] | missed |\n"
-            "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n")
+    head = ("| seed | joints | sim NN/perfect | none/perfect | real NN/none | real NN/none, true positions | worst friction net | gravity RMS | gravity largest | joint NN/ideal | perfect run: joint at rest | time [s] | missed |\n"
+            "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n")
     lines = []
     for row in rows:
         missed, little = verdicts(row)
         if "error" in row:
-            lines.append(f"| {row['seed']} | {row['joints']} | | | | | | | | {row['wall_s']:.0f} | run failed: {row['error']} |")
+            lines.append(f"| {row['seed']} | {row['joints']} | | | | | | | | | | {row['wall_s']:.0f} | run failed: {row['error']} |")
             continue
+        share = row.get("perfect_resting_share")
+        resting = "" if share is None else f"{100 * share:.1f} %"
         note = ", ".join(missed) or "none"
         if little:
             note += " (none/perfect < 5: little friction)"
         lines.append(
             f"| {row['seed']} | {row['joints']} | {row['sim_nn_over_perfect']:.3f} | {row['sim_none_over_perfect']:.1f} | "
-            f"{row['real_nn_over_none']:.3f} | {100 * row['worst_friction_net_share']:.2f} % | {100 * row['gravity_rms_share']:.2f} % | "
-            f"{100 * row['gravity_max_share']:.2f} % | {row['joint_nn_over_ideal']:.2f} | {row['run_s']:.0f} | {note} |")
+            f"{row['real_nn_over_none']:.3f} | {row['real_nn_over_none_true']:.3f} | {100 * row['worst_friction_net_share']:.2f} % | {100 * row['gravity_rms_share']:.2f} % | "
+            f"{100 * row['gravity_max_share']:.2f} % | {row['joint_nn_over_ideal']:.2f} | {resting} | {row['run_s']:.0f} | {note} |")
     met = sum(1 for row in rows if not verdicts(row)[0])
     return head + "\n".join(lines) + f"\n\n{met} of {len(rows)} arms meet every target.\n"
 
@@ -108,14 +143,19 @@ def main():
     p.add_argument("--count", type=int, default=20)
     p.add_argument("--out", required=True)
     p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--rebuild", action="store_true", help="only rebuild the table from the runs already in OUT/runs")
     p.add_argument("extra", nargs="*")
     a = p.parse_args()
     if a.count < 1:
         sys.exit("bench-family: N must be at least 1")
     for sub in ("arms", "runs"):
         os.makedirs(os.path.join(a.out, sub), exist_ok=True)
-    with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
-        rows = list(pool.map(lambda s: run_arm(a.neurarm, a.out, s, a.extra), range(1, a.count + 1)))
+    if a.rebuild:
+        rows = [read_row(a.out, s, math.nan, 0 if os.path.isfile(os.path.join(paths(a.out, s)[1], "results.json")) else 1)
+                for s in range(1, a.count + 1)]
+    else:
+        with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
+            rows = list(pool.map(lambda s: run_arm(a.neurarm, a.out, s, a.extra), range(1, a.count + 1)))
     text = ("# The paper's pipeline on the random family of arms\n\n"
             f"Full `neurarm paper` runs, one thread each, {a.jobs} at a time; extra options: {' '.join(a.extra) or 'none'}.\n\n"
             + table(rows))

@@ -85,6 +85,9 @@ pub struct Table1 {
     pub sum_m2: Cases,
     /// Samples per run.
     pub samples: usize,
+    /// Share of the samples with some joint at rest (see
+    /// [`super::tracking::TrackingErrors::resting_share`]).
+    pub resting_share: Cases,
     /// Ratios of the measured MSEs.
     pub ratios: Ratios,
     /// The paper's values [m²].
@@ -541,6 +544,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         rms_mm: pick(&|e| e.true_rms_mm),
         sum_m2: pick(&|e| e.measured_sum_m2),
         samples: errors[0].samples,
+        resting_share: pick(&|e| e.resting_share),
         ratios: Ratios::of(&mse),
         paper_m2: paper,
         paper_over_ours: log_ratio.exp(),

@@ -87,7 +87,14 @@ pub struct TrackingErrors {
     pub measured_sum_m2: f64,
     /// Samples.
     pub samples: usize,
+    /// Share of the samples in which some joint is at rest, |q̇ᵢ| < [`RESTING_SPEED_RAD_S`]
+    /// (the arm's true speeds): joints that stick under friction, where a compensator fed the
+    /// measured speed gives nothing.
+    pub resting_share: f64,
 }
+
+/// A joint slower than this is at rest for [`TrackingErrors::resting_share`] [rad/s].
+pub const RESTING_SPEED_RAD_S: f64 = 1e-3;
 
 /// The errors of a tracking run: against the measured and the true position.
 pub fn tracking_errors(run: &LoopRun) -> TrackingErrors {
@@ -98,6 +105,8 @@ pub fn tracking_errors(run: &LoopRun) -> TrackingErrors {
     let measured_sum: f64 = ex.iter().zip(&ey).map(|(a, b)| a * a + b * b).sum();
     let true_sum: f64 = (0..xr.len().min(x.len())).map(|k| (xr[k] - x[k]).powi(2) + (yr[k] - y[k]).powi(2)).sum();
     let denominator = 2.0 * samples.max(1) as f64;
+    let speeds: Vec<Vec<f64>> = run.columns.iter().filter(|c| c.starts_with("arm.qd_")).filter_map(|c| run.column(c)).collect();
+    let resting = (0..samples).filter(|&k| speeds.iter().any(|c| c.get(k).is_some_and(|v| v.abs() < RESTING_SPEED_RAD_S))).count();
     let true_mse = true_sum / denominator;
     TrackingErrors {
         measured_mse_m2: measured_sum / denominator,
@@ -105,5 +114,23 @@ pub fn tracking_errors(run: &LoopRun) -> TrackingErrors {
         true_rms_mm: 1e3 * (2.0 * true_mse).sqrt(),
         measured_sum_m2: measured_sum,
         samples,
+        resting_share: resting as f64 / samples.max(1) as f64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_resting_share_counts_samples_with_any_joint_below_a_milliradian_per_second() {
+        let columns = ["time", "ctl.error_x", "ctl.error_y", "arm.qd_1", "arm.qd_2"].map(String::from).to_vec();
+        // Samples 1 and 3 have a joint at rest (one each), sample 2 a joint just above it.
+        let speeds = [[0.5, -0.2], [0.0, 1.0], [0.5, -1.5e-3], [0.3, 5e-4]];
+        let rows = speeds.iter().enumerate().map(|(k, s)| vec![k as f64, 1e-3, -2e-3, s[0], s[1]]).collect();
+        let e = tracking_errors(&LoopRun { columns, rows });
+        assert_eq!(e.samples, 4);
+        assert_eq!(e.resting_share, 0.5);
+        assert!((e.measured_mse_m2 - 2.5e-6).abs() < 1e-18, "{}", e.measured_mse_m2);
     }
 }

@@ -150,6 +150,9 @@ pub fn report_markdown(run: &PaperRun) -> String {
         }
     );
 
+    /// Above this share of the perfect run's samples with a joint at rest, the report says the
+    /// joints stick.
+    const STICKING_SHARE: f64 = 0.05;
     let _ = writeln!(s, "## Table 1: tracking error of the task-space loop\n");
     let _ = writeln!(
         s,
@@ -165,7 +168,24 @@ pub fn report_markdown(run: &PaperRun) -> String {
     let _ = writeln!(s, "| paper, MSE [m²] | {} |", cases(&p, |v| format!("{v}")));
     let _ = writeln!(s, "| neurarm, MSE measured [m²] | {} |", cases(&t.mse_m2, |v| format!("{v:.3e}")));
     let _ = writeln!(s, "| neurarm, MSE true position [m²] | {} |", cases(&t.true_mse_m2, |v| format!("{v:.3e}")));
-    let _ = writeln!(s, "| neurarm, RMS distance, true position [mm] | {} |\n", cases(&t.rms_mm, |v| format!("{v:.3}")));
+    let _ = writeln!(s, "| neurarm, RMS distance, true position [mm] | {} |", cases(&t.rms_mm, |v| format!("{v:.3}")));
+    let _ = writeln!(s, "| neurarm, samples with a joint at rest [%] | {} |\n", cases(&t.resting_share, |v| format!("{:.1}", 100.0 * v)));
+    if t.resting_share.sim_perfect > STICKING_SHARE {
+        let _ = writeln!(
+            s,
+            "**Joints stick.** In {:.0} % of the perfect-compensation run some joint is at rest (|q̇| < 1 mrad/s): friction holds it \
+             until the law's torque breaks it away, and a compensator fed the measured speed gives nothing at rest. Which joints stick \
+             then decides the error more than the compensator does, so the NN/perfect ratio below is a comparison of two stick–slip \
+             motions, sensitive to small torque differences. {}\n",
+            100.0 * t.resting_share.sim_perfect,
+            match settings.intent_horizon {
+                None =>
+                    "To compensate joints at rest the way the law moves them, feed the compensators the commanded speed: \
+                         `neurarm paper --intent-horizon 0.01` (see the README).",
+                Some(_) => "The compensators are fed the commanded speed already (`--intent-horizon`).",
+            }
+        );
+    }
     let _ = writeln!(
         s,
         "On the simulated arm the measured and true positions are the same; on the {real} arm the measured one carries the sensor \
