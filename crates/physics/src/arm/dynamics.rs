@@ -36,7 +36,15 @@ fn lever(params: &ArmParams, i: usize, a: usize) -> f64 {
 pub fn mass_matrix_into(params: &ArmParams, data: &mut ArmData, q: &[f64], out: &mut DMatrix<f64>) {
     let n = params.dof();
     absolute_angles_into(q, &mut data.theta);
+    // Each cos(θₐ − θ_b) once (n² of them) instead of in the innermost loop (O(n⁵) calls, most
+    // of an 8-joint identification's time); the same values, so the sums are bit for bit.
     let theta = &data.theta;
+    for a in 0..n {
+        for b in 0..n {
+            data.pair_trig[a * n + b] = (theta[a] - theta[b]).cos();
+        }
+    }
+    let cos_difference = &data.pair_trig;
     for k in 0..n {
         for j in 0..n {
             let mut h = 0.0;
@@ -45,7 +53,7 @@ pub fn mass_matrix_into(params: &ArmParams, data: &mut ArmData, q: &[f64], out: 
                 let mut sum = 0.0;
                 for a in j..=i {
                     for b in k..=i {
-                        sum += lever(params, i, a) * lever(params, i, b) * (theta[a] - theta[b]).cos();
+                        sum += lever(params, i, a) * lever(params, i, b) * cos_difference[a * n + b];
                     }
                 }
                 h += link.inertia_kgm2 + link.mass_kg * sum;
@@ -67,7 +75,14 @@ pub fn mass_matrix(params: &ArmParams, q: &[f64]) -> DMatrix<f64> {
 fn mass_matrix_derivative(params: &ArmParams, data: &mut ArmData, q: &[f64]) {
     let n = params.dof();
     absolute_angles_into(q, &mut data.theta);
+    // Each sin(θₐ − θ_b) once, as in `mass_matrix_into`.
     let theta = &data.theta;
+    for a in 0..n {
+        for b in 0..n {
+            data.pair_trig[a * n + b] = (theta[a] - theta[b]).sin();
+        }
+    }
+    let sin_difference = &data.pair_trig;
     // ∂θₐ/∂q_l = [l <= a]
     let dtheta = |a: usize, l: usize| if l <= a { 1.0 } else { 0.0 };
     for l in 0..n {
@@ -80,7 +95,7 @@ fn mass_matrix_derivative(params: &ArmParams, data: &mut ArmData, q: &[f64]) {
                         for b in k..=i {
                             let w = dtheta(a, l) - dtheta(b, l);
                             if w != 0.0 {
-                                s -= m * lever(params, i, a) * lever(params, i, b) * (theta[a] - theta[b]).sin() * w;
+                                s -= m * lever(params, i, a) * lever(params, i, b) * sin_difference[a * n + b] * w;
                             }
                         }
                     }
@@ -248,6 +263,8 @@ pub struct ArmData {
     theta: Vec<f64>,
     /// ∂H/∂q, n³ entries.
     dh: Vec<f64>,
+    /// cos or sin of θₐ − θ_b at `[a*n + b]`, for the closed-form mass matrix and its derivative.
+    pair_trig: Vec<f64>,
     /// A mass matrix.
     mass: DMatrix<f64>,
     /// A joint-torque vector.
@@ -270,6 +287,7 @@ impl ArmData {
             n,
             theta: vec![0.0; n],
             dh: vec![0.0; n * n * n],
+            pair_trig: vec![0.0; n * n],
             mass: DMatrix::zeros(n, n),
             bias: DVector::zeros(n),
             cos: vec![0.0; n],
