@@ -1,6 +1,9 @@
 //! One RK4 step of the default arm at dt = 1 ms (internal step = 1 ms, so exactly one RK4 step
 //! as MuJoCo's RK4 takes), with and without friction, and one 1 ms step with the default
 //! 0.25 ms internal step. `scripts/bench-arm` runs this and MuJoCo and prints the ratio.
+//! Also, for an 8-joint arm, the closed-form mass matrix and Coriolis torques (what the
+//! identification's rigid hold computes every step) beside Newton–Euler inverse dynamics, the
+//! O(n) peer: `cargo bench --bench arm_step -- rigid_body`.
 
 #![allow(missing_docs)] // criterion_group! makes an undocumented public function
 
@@ -32,5 +35,23 @@ fn arm_step(c: &mut Criterion) {
     bench_step(c, "step_1ms_default_substeps/friction", arm, IntegratorSettings::default().internal_step_s);
 }
 
-criterion_group!(benches, arm_step);
+fn rigid_body_terms(c: &mut Criterion) {
+    let n = 8;
+    let arm = neurarm_physics::family::random_arm(2, n).arm;
+    let mut data = ArmData::new(&arm);
+    let q: Vec<f64> = (0..n).map(|i| 0.3 * i as f64 - 1.0).collect();
+    let qd: Vec<f64> = (0..n).map(|i| 0.5 - 0.1 * i as f64).collect();
+    let (mut h, mut out) = (nalgebra::DMatrix::zeros(n, n), vec![0.0; n]);
+    c.bench_function("rigid_body_8_joints/mass_matrix_and_coriolis", |b| {
+        b.iter(|| {
+            mass_matrix_into(&arm, &mut data, black_box(&q), &mut h);
+            coriolis_centrifugal_into(&arm, &mut data, black_box(&q), black_box(&qd), &mut out);
+        })
+    });
+    c.bench_function("rigid_body_8_joints/newton_euler_inverse_dynamics", |b| {
+        b.iter(|| inverse_dynamics_rnea_into(&arm, &mut data, black_box(&q), black_box(&qd), black_box(&qd), &mut out))
+    });
+}
+
+criterion_group!(benches, arm_step, rigid_body_terms);
 criterion_main!(benches);
