@@ -83,8 +83,9 @@ fn mass_matrix_derivative(params: &ArmParams, data: &mut ArmData, q: &[f64]) {
         }
     }
     let sin_difference = &data.pair_trig;
-    // ∂θₐ/∂q_l = [l <= a]
-    let dtheta = |a: usize, l: usize| if l <= a { 1.0 } else { 0.0 };
+    // With ∂θₐ/∂q_l = [l <= a], the term of (a, b) has the weight [l <= a] − [l <= b]: only
+    // the b on the other side of l from a count (+1 for a ≥ l > b, −1 for a < l ≤ b), so the
+    // loop over b visits just those, in the same order as before.
     for l in 0..n {
         for j in 0..n {
             for k in 0..n {
@@ -92,11 +93,9 @@ fn mass_matrix_derivative(params: &ArmParams, data: &mut ArmData, q: &[f64]) {
                 for i in j.max(k)..n {
                     let m = params.links[i].mass_kg;
                     for a in j..=i {
-                        for b in k..=i {
-                            let w = dtheta(a, l) - dtheta(b, l);
-                            if w != 0.0 {
-                                s -= m * lever(params, i, a) * lever(params, i, b) * sin_difference[a * n + b] * w;
-                            }
+                        let (others, w) = if l <= a { (k..l.min(i + 1), 1.0) } else { (k.max(l)..i + 1, -1.0) };
+                        for b in others {
+                            s -= m * lever(params, i, a) * lever(params, i, b) * sin_difference[a * n + b] * w;
                         }
                     }
                 }
