@@ -1,9 +1,9 @@
 //! One RK4 step of the default arm at dt = 1 ms (internal step = 1 ms, so exactly one RK4 step
 //! as MuJoCo's RK4 takes), with and without friction, and one 1 ms step with the default
 //! 0.25 ms internal step. `scripts/bench-arm` runs this and MuJoCo and prints the ratio.
-//! Also, for an 8-joint arm, the closed-form mass matrix and Coriolis torques (what the
-//! identification's rigid hold computes every step) beside Newton–Euler inverse dynamics, the
-//! O(n) peer: `cargo bench --bench arm_step -- rigid_body`.
+//! Also, for an 8-joint arm, the closed-form mass matrix and Coriolis torques, in full and of
+//! one moving joint (what the friction identification's rigid hold computes every step),
+//! beside Newton–Euler inverse dynamics, the O(n) peer: `cargo bench --bench arm_step -- rigid_body`.
 
 #![allow(missing_docs)] // criterion_group! makes an undocumented public function
 
@@ -46,6 +46,12 @@ fn rigid_body_terms(c: &mut Criterion) {
         b.iter(|| {
             mass_matrix_into(&arm, &mut data, black_box(&q), &mut h);
             coriolis_centrifugal_into(&arm, &mut data, black_box(&q), black_box(&qd), &mut out);
+        })
+    });
+    c.bench_function("rigid_body_8_joints/mass_matrix_and_coriolis_of_one_joint", |b| {
+        b.iter(|| {
+            mass_matrix_into(&arm, &mut data, black_box(&q), &mut h);
+            coriolis_of_one_joint_into(&arm, &mut data, black_box(&q), 2, black_box(qd[2]), &mut out);
         })
     });
     c.bench_function("rigid_body_8_joints/newton_euler_inverse_dynamics", |b| {

@@ -9,7 +9,7 @@ use super::{joint_loop, lightest_inertias, master, Settings, IDENTIFICATION_INTE
 pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
-use neurarm_physics::arm::{coriolis_centrifugal_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
+use neurarm_physics::arm::{coriolis_of_one_joint_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
 use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
 
 /// How the friction runs hold the joints that are not driven.
@@ -175,7 +175,6 @@ pub fn friction_run(
     let mut data = ArmData::new(&rigid_body);
     let (mut h, mut c, mut u, mut x, mut commanded) =
         (nalgebra::DMatrix::zeros(n, n), vec![0.0; n], vec![0.0; n], vec![0.0; 2 * n], vec![0.0; n]);
-    let mut driven_speed = vec![0.0; n];
     const HOLD_RAD_S: f64 = 20.0;
     // One step with the driven joint under `drive`; returns its measured speed after the step
     // and the torque it got.
@@ -186,10 +185,7 @@ pub fn friction_run(
             mass_matrix_into(&rigid_body, &mut data, q, &mut h);
             // The held joints are at rest but for noise: their measured speeds would only put
             // that noise into the Coriolis terms (× the driven joint's speed).
-            for i in 0..n {
-                driven_speed[i] = if i == joint { qd[i] } else { 0.0 };
-            }
-            coriolis_centrifugal_into(&rigid_body, &mut data, q, &driven_speed, &mut c);
+            coriolis_of_one_joint_into(&rigid_body, &mut data, q, joint, qd[joint], &mut c);
             for i in 0..n {
                 u[i] = -2.0 * HOLD_RAD_S * qd[i] - HOLD_RAD_S * HOLD_RAD_S * q[i];
             }

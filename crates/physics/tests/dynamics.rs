@@ -272,3 +272,29 @@ fn gravity_load_is_the_level_stretched_arms_gravity_torque() {
         }
     }
 }
+
+/// The Coriolis torques of one moving joint, from the few ∂H/∂q entries they need, are the
+/// full Christoffel sum's with that speed vector, and agree with Newton–Euler (q̈ = 0, no
+/// gravity).
+#[test]
+fn coriolis_of_one_moving_joint_is_the_full_sum() {
+    let mut rng = ChaCha8Rng::seed_from_u64(20);
+    for n in 1..=8 {
+        let arm = random_arm(&mut rng, n).with_base_angle(0.0);
+        let mut data = ArmData::new(&arm);
+        let q = random_vec(&mut rng, n, 3.0);
+        for joint in 0..n {
+            let speed = rng.gen_range(-5.0..5.0);
+            let mut speeds = vec![0.0; n];
+            speeds[joint] = speed;
+            let (mut one, mut full, mut rnea) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            coriolis_of_one_joint_into(&arm, &mut data, &q, joint, speed, &mut one);
+            coriolis_centrifugal_into(&arm, &mut data, &q, &speeds, &mut full);
+            inverse_dynamics_rnea_into(&arm, &mut data, &q, &speeds, &vec![0.0; n], &mut rnea);
+            assert_eq!(one, full, "{n} joints, joint {joint}");
+            for i in 0..n {
+                assert!((one[i] - rnea[i]).abs() <= 1e-9 * (1.0 + rnea[i].abs()), "{n} joints, joint {joint}: {one:?} vs {rnea:?}");
+            }
+        }
+    }
+}

@@ -71,37 +71,64 @@ pub fn mass_matrix(params: &ArmParams, q: &[f64]) -> DMatrix<f64> {
     h
 }
 
-/// ∂H_jk/∂q_l for all j, k, l, closed form [kg·m²/rad], into `data.dh` at `[l·n² + j·n + k]`.
-fn mass_matrix_derivative(params: &ArmParams, data: &mut ArmData, q: &[f64]) {
+/// Fills `data.pair_trig` with sin(θₐ − θ_b) at `[a*n + b]` for the angles `q` [rad]: each
+/// once (n² of them) instead of in the innermost loop of [`mass_matrix_derivative_entry`].
+fn fill_sin_differences(params: &ArmParams, data: &mut ArmData, q: &[f64]) {
     let n = params.dof();
     absolute_angles_into(q, &mut data.theta);
-    // Each sin(θₐ − θ_b) once, as in `mass_matrix_into`.
     let theta = &data.theta;
     for a in 0..n {
         for b in 0..n {
             data.pair_trig[a * n + b] = (theta[a] - theta[b]).sin();
         }
     }
-    let sin_difference = &data.pair_trig;
+}
+
+/// ∂H_jk/∂q_l, closed form [kg·m²/rad], from the sines of [`fill_sin_differences`].
+fn mass_matrix_derivative_entry(params: &ArmParams, sin_difference: &[f64], l: usize, j: usize, k: usize) -> f64 {
+    let n = params.dof();
     // With ∂θₐ/∂q_l = [l <= a], the term of (a, b) has the weight [l <= a] − [l <= b]: only
     // the b on the other side of l from a count (+1 for a ≥ l > b, −1 for a < l ≤ b), so the
-    // loop over b visits just those, in the same order as before.
+    // loop over b visits just those.
+    let mut s = 0.0;
+    for i in j.max(k)..n {
+        let m = params.links[i].mass_kg;
+        for a in j..=i {
+            let (others, w) = if l <= a { (k..l.min(i + 1), 1.0) } else { (k.max(l)..i + 1, -1.0) };
+            for b in others {
+                s -= m * lever(params, i, a) * lever(params, i, b) * sin_difference[a * n + b] * w;
+            }
+        }
+    }
+    s
+}
+
+/// ∂H_jk/∂q_l for all j, k, l, closed form [kg·m²/rad], into `data.dh` at `[l·n² + j·n + k]`.
+fn mass_matrix_derivative(params: &ArmParams, data: &mut ArmData, q: &[f64]) {
+    let n = params.dof();
+    fill_sin_differences(params, data, q);
     for l in 0..n {
         for j in 0..n {
             for k in 0..n {
-                let mut s = 0.0;
-                for i in j.max(k)..n {
-                    let m = params.links[i].mass_kg;
-                    for a in j..=i {
-                        let (others, w) = if l <= a { (k..l.min(i + 1), 1.0) } else { (k.max(l)..i + 1, -1.0) };
-                        for b in others {
-                            s -= m * lever(params, i, a) * lever(params, i, b) * sin_difference[a * n + b] * w;
-                        }
-                    }
-                }
-                data.dh[(l * n + j) * n + k] = s;
+                data.dh[(l * n + j) * n + k] = mass_matrix_derivative_entry(params, &data.pair_trig, l, j, k);
             }
         }
+    }
+}
+
+/// Coriolis and centrifugal torques C(q,q̇)·q̇ [N·m] when joint `joint` (0-based) alone moves,
+/// at `speed` [rad/s]: `Γ_j,ff q̇_f²`, from the n³ entries of ∂H/∂q it needs instead of all
+/// n³·n; equal, bit for bit, to [`coriolis_centrifugal_into`] with that speed vector.
+pub fn coriolis_of_one_joint_into(params: &ArmParams, data: &mut ArmData, q: &[f64], joint: usize, speed: f64, out: &mut [f64]) {
+    let n = params.dof();
+    fill_sin_differences(params, data, q);
+    let f = joint;
+    for (j, o) in out.iter_mut().enumerate().take(n) {
+        // Γ_jff = ½(∂H_jf/∂q_f + ∂H_jf/∂q_f − ∂H_ff/∂q_j), as `christoffel` adds them.
+        let d_jf = mass_matrix_derivative_entry(params, &data.pair_trig, f, j, f);
+        let d_ff = mass_matrix_derivative_entry(params, &data.pair_trig, j, f, f);
+        let gamma = 0.5 * (d_jf + d_jf - d_ff);
+        *o = gamma * speed * speed;
     }
 }
 
