@@ -3,14 +3,17 @@
 //! joint count from 2 to 8, arms nobody tuned the pipeline on. Asserted, against each arm's own
 //! friction law computed here: every run finishes (the reference is placed, or fitted into the
 //! ring of an arm with a hole in its workspace; identification, training and every loop run);
-//! every identified friction pair lies within 0.02 N·m of the law and the pairs span 0.2 to 4.9
-//! rad/s both ways.
+//! every identified friction pair lies within 0.02 N·m of the law (0.5 % of the breakaway torque
+//! on joints above 4 N·m) and the pairs span 0.2 to 4.9
+//! rad/s both ways; the gravity net is within 1 % RMS and 5 % at worst of each joint's largest
+//! torque over the whole turn; in the joint loop NN compensation settles at most 1.5 × as far
+//! from the targets as the ideal compensator (issue 24's targets).
 //!
 //! Printed, not asserted, because on some of these arms they miss issue 24's targets (open; see
-//! its notes and `scripts/bench-family`): sim NN/perfect (target ≤ 1.10), none/perfect (≥ 5),
-//! real NN/none (≤ 0.3), the friction nets' error (2 % on the example arms), the gravity net's
-//! whole-turn error (a quick run's 200 poses are not the full run's design) and the joint
-//! loop's NN/ideal (≤ 1.5).
+//! its notes and `scripts/bench-family`): sim NN/perfect (target ≤ 1.10; stick–slip, see the
+//! last column, the share of the perfect run's samples with a joint at rest), none/perfect
+//! (≥ 5), real NN/none (≤ 0.3; the emulated sensors' noise floor) and the friction nets' error
+//! (2 % on the example arms).
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
 use std::sync::Mutex;
@@ -74,6 +77,17 @@ fn run_one(seed: u64, joints: usize) -> String {
     let (rms, max) = quality::gravity_whole_turn(out.path(), &config);
     let settled = &r.joint_loop.settled_rad;
     let joint_ratio = settled[1].iter().zip(&settled[0]).map(|(nn, ideal)| nn / ideal).fold(0.0, f64::max);
+    // Issue 24's gravity and joint-loop targets hold on every family arm.
+    for i in 0..joints {
+        assert!(
+            rms[i] < 0.01 && max[i] < 0.05,
+            "joint {}: gravity net off by {:.2} % RMS, {:.2} % at worst",
+            i + 1,
+            100.0 * rms[i],
+            100.0 * max[i]
+        );
+    }
+    assert!(joint_ratio <= 1.5, "joint loop: NN settles {joint_ratio:.2} × as far from the targets as the ideal compensator");
     format!(
         "{seed:4} {joints:6} | {nn_perfect:14.3} {none_perfect:12.1} {real_nn_none:12.3} | {:.2} %, real {:.2} % | {:.2} %, {:.2} % | {joint_ratio:.2} | {:.1} %",
         100.0 * worst_net,
@@ -82,4 +96,27 @@ fn run_one(seed: u64, joints: usize) -> String {
         100.0 * max.iter().cloned().fold(0.0, f64::max),
         100.0 * r.table_1.resting_share.sim_perfect,
     )
+}
+
+/// An arm whose viscous friction is stiff for its light distal links (seed 14, 8 joints: a decay
+/// rate of 3781 1/s in some poses): at the identification's usual 1 ms RK4 step its gravity
+/// sweep diverged to NaN torques within 13 s; the step chosen for it keeps the sweep stable.
+#[test]
+fn a_stiff_arm_gets_an_identification_step_it_is_stable_at() {
+    use neurarm::experiments::{build_fmus, design_poses, gravity_sweep, identification_internal_step, IDENTIFICATION_INTERNAL_STEP_S};
+    let arms = Arms::new(random_arm(14, 8), None, None).unwrap();
+    let arm = &arms.nominal.arm;
+    let pose = [0.170, 1.731, 1.054, 0.886, 5.302, 1.651, 6.172, 3.798];
+    let rate = neurarm_physics::arm::largest_viscous_rate(arm, &pose).unwrap();
+    let step = identification_internal_step(arm);
+    assert!(rate * IDENTIFICATION_INTERNAL_STEP_S > 2.785, "RK4 at 1 ms is unstable here: rate {rate} 1/s");
+    assert!(rate * step <= 2.0, "step {step} s at rate {rate} 1/s");
+    let settings = Settings { threads: 1, ..Settings::paper() };
+    let dir = tempfile::tempdir().unwrap();
+    let fmus = build_fmus(dir.path(), &arms, &settings).unwrap();
+    let (poses, _) = design_poses(settings.design_for(8), 8, settings.seed + 17);
+    let sweep = gravity_sweep(&fmus.arm, &fmus.joint_controller, arm, &poses[..40], None, &settings).unwrap();
+    assert!(!sweep.pairs.is_empty() && sweep.pairs.iter().all(|(_, t)| t.iter().all(|v| v.is_finite())));
+    // The arms whose identification was measured at 1 ms keep it.
+    assert_eq!(identification_internal_step(&neurarm_physics::arm::ArmParams::default_four_link()), IDENTIFICATION_INTERNAL_STEP_S);
 }

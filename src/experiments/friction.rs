@@ -5,7 +5,7 @@ use std::path::Path;
 
 use nalgebra::DMatrix;
 
-use super::{joint_loop, lightest_inertias, master, Settings, IDENTIFICATION_INTERNAL_STEP_S};
+use super::{identification_internal_step, joint_loop, lightest_inertias, master, Settings};
 pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
@@ -160,7 +160,7 @@ pub fn friction_run(
     let mut gains = if rigid { vec![(0.0, 0.0); n] } else { hold_gains(model) };
     gains[joint] = (0.0, 0.0);
     // Friction is identified with the arm horizontal, whatever its configured base angle.
-    let parameters = [("internal_step", Value::Real(IDENTIFICATION_INTERNAL_STEP_S)), ("base_angle", Value::Real(0.0))];
+    let parameters = [("internal_step", Value::Real(identification_internal_step(model))), ("base_angle", Value::Real(0.0))];
     let mut s = joint_loop(arm_fmu, controller, &parameters, &gains, None)?;
     s.set("ctl", "use_sequence", Value::Boolean(false)).map_err(master)?;
     let mut sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[]).map_err(master)?;

@@ -9,7 +9,7 @@ use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};
 
 use super::friction::FrictionCurve;
-use super::{joint_loop, master, parallel, GravityDesign, Settings, IDENTIFICATION_INTERNAL_STEP_S};
+use super::{identification_internal_step, joint_loop, master, parallel, GravityDesign, Settings};
 use crate::identify::{gravity_pair, GravityCorrection, GravityOptions, PassFault, PassWindow};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{gravity_torques, inverse_dynamics_rnea_into, ArmData, ArmParams};
@@ -213,7 +213,7 @@ pub fn gravity_sweep(
     let offset = SWEEP_SPEED * PASS_S / 2.0;
     let first: Vec<f64> = points[0].iter().map(|q| q - offset).collect();
     let mut parameters: Vec<(String, Value)> =
-        vec![("base_angle".into(), Value::Real(PI / 2.0)), ("internal_step".into(), Value::Real(IDENTIFICATION_INTERNAL_STEP_S))];
+        vec![("base_angle".into(), Value::Real(PI / 2.0)), ("internal_step".into(), Value::Real(identification_internal_step(model)))];
     for (i, q) in first.iter().enumerate() {
         parameters.push((format!("q0_{}", i + 1), Value::Real(*q)));
     }

@@ -38,11 +38,37 @@ pub use joint_space::{gravity_compensation_system, joint_rms_errors, joint_settl
 pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_GRAVITY_POSES, MAX_JOINTS, MIN_JOINTS};
 pub use tracking::{tracking_errors, tracking_mse, tracking_start, tracking_system, TrackingErrors, TRACKING_SEED_POSE};
 
-/// RK4 sub-step of the arm in the identification runs [s]: one per 1 ms communication step.
-/// Their motions are slow and smooth (PD loops at 40 rad/s, constant speeds), where RK4 at
-/// 1 ms keeps the energy to 1e-10 J over 10 s (tests/dynamics.rs); the closed loops of
-/// Table 1 keep the default 0.25 ms.
+/// Longest RK4 sub-step of the arm in the identification runs [s]: one per 1 ms communication
+/// step. Their motions are slow and smooth (PD loops at 40 rad/s, constant speeds), where RK4
+/// at 1 ms keeps the energy to 1e-10 J over 10 s (tests/dynamics.rs); the closed loops of
+/// Table 1 keep the default 0.25 ms. Arms whose viscous friction is stiff for their inertia
+/// get a shorter one ([`identification_internal_step`]).
 pub const IDENTIFICATION_INTERNAL_STEP_S: f64 = 1e-3;
+
+/// Poses [`identification_internal_step`] looks at.
+const STIFFNESS_POSES: usize = 256;
+
+/// The arm's RK4 sub-step in the identification runs [s]: [`IDENTIFICATION_INTERNAL_STEP_S`],
+/// or 1 ms / k (k whole) where that would leave RK4 unstable on the arm's viscous friction:
+/// h × rate ≤ 2 (RK4's bound is 2.785) for the fastest rate of
+/// [`neurarm_physics::arm::largest_viscous_rate`] over 256 seeded random poses and the
+/// stretched arm, taken twice for the poses not seen. (An 8-joint family arm, seed 14, reached
+/// 3781 1/s; at 1 ms its gravity sweep blew up to NaN torques.)
+pub fn identification_internal_step(arm: &ArmParams) -> f64 {
+    use rand::{Rng, SeedableRng};
+    let n = arm.dof();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0x5717);
+    let mut fastest = neurarm_physics::arm::largest_viscous_rate(arm, &vec![0.0; n]).unwrap_or(0.0);
+    for _ in 0..STIFFNESS_POSES {
+        let q: Vec<f64> = (0..n).map(|_| rng.gen_range(-PI..PI)).collect();
+        fastest = fastest.max(neurarm_physics::arm::largest_viscous_rate(arm, &q).unwrap_or(0.0));
+    }
+    let longest = 2.0 / (2.0 * fastest);
+    if longest >= IDENTIFICATION_INTERNAL_STEP_S {
+        return IDENTIFICATION_INTERNAL_STEP_S;
+    }
+    IDENTIFICATION_INTERNAL_STEP_S / (IDENTIFICATION_INTERNAL_STEP_S / longest).ceil()
+}
 
 /// Fastest joint speed a closed loop may reach before it is called unstable [rad/s]: 20 × the
 /// friction experiment's top speed, far above any motion the paper's loops ask for.

@@ -5,7 +5,10 @@
 //! `τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + τ_comp`, with Ĥ, Ĉ, ĝ from the controller's model of the
 //! arm (friction is left to `tau_comp`). Static in its inputs (direct feedthrough); the
 //! reference depends on time. Outputs `s_i`, the learning signal an adaptive compensator
-//! takes: `s = Ĥ⁻¹ Jᵀ (ė + λ e)` with e = x_d − x ([`task_learning_signal_into`]).
+//! takes: `s = Ĥ⁻¹ Jᵀ (ė + λ e)` with e = x_d − x ([`task_learning_signal_into`]); and
+//! `qd_intended_i = q̇ᵢ + h uᵢ` (h = `intent_horizon`), the speed the law drives joint i
+//! towards, for a friction compensator that should push a joint at rest the way the law
+//! accelerates it (it depends on q and q̇ only, so feeding a compensator makes no loop).
 
 use std::path::Path;
 
@@ -59,7 +62,10 @@ impl ModelKind for TaskSpaceControllerSpec {
 <p><code>u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) + (I − J#J)(k_rest (q_rest − q) − k_null q̇)</code>, with J# the Moore–Penrose pseudo-inverse \
 (Jᵀ(JJᵀ)⁻¹ away from singular poses; at a singular pose the direction J has lost gets no acceleration); the last term acts on the self-motion of the redundant joints, which the task does not fix: it damps it and, with k_rest &gt; 0 (default 0), brings it back to the rest pose q_rest (each joint's distance taken within ±π), so it cannot drift; on arms with strong joint friction a stiffness lets redundant joints come to rest and stick, hence the default.</p>\
 <p><code>τ = Ĥ(q) u + Ĉ(q, q̇) q̇ + ĝ(q) + tau_comp</code>, Ĥ, Ĉ, ĝ from the controller's own arm model \
-(in resources/neurarm.toml). Non-finite inputs fail the step with fmi2Error.</p>"
+(in resources/neurarm.toml). Non-finite inputs fail the step with fmi2Error.</p>\
+<p><code>qd_intended_i = qd_i + intent_horizon · u_i</code>: the speed the law drives joint i towards, for a friction \
+compensator fed it instead of the measured speed (then a joint at rest is compensated the way the law accelerates it); \
+it depends on q and qd only.</p>"
     }
 }
 

@@ -298,3 +298,18 @@ fn coriolis_of_one_moving_joint_is_the_full_sum() {
         }
     }
 }
+
+/// One joint: viscous friction b on the link's inertia about its joint, I + m c², decays the
+/// speed at b / (I + m c²).
+#[test]
+fn the_viscous_rate_of_one_joint_is_its_slope_over_its_inertia() {
+    let mut arm = ArmParams::default_four_link();
+    arm.links.truncate(1);
+    arm.friction.truncate(1);
+    arm.friction[0].positive.viscous_nms_rad = 0.3;
+    arm.friction[0].negative.viscous_nms_rad = 0.7;
+    let link = &arm.links[0];
+    let want = 0.7 / (link.inertia_kgm2 + link.mass_kg * link.com_m * link.com_m);
+    let got = largest_viscous_rate(&arm, &[0.4]).unwrap();
+    assert!((got - want).abs() <= 1e-12 * want, "{got} vs {want}");
+}

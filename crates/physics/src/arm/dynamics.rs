@@ -132,6 +132,22 @@ pub fn coriolis_of_one_joint_into(params: &ArmParams, data: &mut ArmData, q: &[f
     }
 }
 
+/// The fastest decay rate viscous friction gives the arm at pose `q` [1/s]: the largest
+/// eigenvalue of H(q)⁻¹ B, B the diagonal of each joint's largest viscous slope (of both
+/// directions; a viscous term that falls with speed is steepest at rest). An explicit
+/// integrator's step must stay below its stability bound over this rate (RK4: 2.785 / rate);
+/// light distal links behind strongly damped joints make it thousands per second. `None` when
+/// H is not positive definite.
+pub fn largest_viscous_rate(params: &ArmParams, q: &[f64]) -> Option<f64> {
+    let h = mass_matrix(params, q);
+    let l = h.cholesky()?;
+    let l_inverse = l.l().try_inverse()?;
+    let n = params.dof();
+    let slopes = DVector::from_iterator(n, params.friction.iter().map(|f| f.positive.viscous_nms_rad.max(f.negative.viscous_nms_rad)));
+    let scaled = &l_inverse * DMatrix::from_diagonal(&slopes) * l_inverse.transpose();
+    Some(scaled.symmetric_eigen().eigenvalues.max())
+}
+
 /// Christoffel symbol `Γ_jkl = ½(∂H_jk/∂q_l + ∂H_jl/∂q_k − ∂H_kl/∂q_j)` from `data.dh`.
 #[inline]
 fn christoffel(dh: &[f64], n: usize, j: usize, k: usize, l: usize) -> f64 {

@@ -15,7 +15,7 @@ pub use drift::{OperatingChange, MAX_FRICTION_SCALE};
 pub use dynamics::{
     coriolis_centrifugal, coriolis_centrifugal_into, coriolis_matrix, coriolis_matrix_into, coriolis_of_one_joint_into, gravity_torques,
     gravity_torques_into, inverse_dynamics, inverse_dynamics_into, inverse_dynamics_rnea, inverse_dynamics_rnea_into, kinetic_energy,
-    kinetic_energy_with, mass_matrix, mass_matrix_into, potential_energy, ArmData,
+    kinetic_energy_with, largest_viscous_rate, mass_matrix, mass_matrix_into, potential_energy, ArmData,
 };
 pub use friction::{FrictionBranch, JointFriction};
 pub use hardware::{HardwareEffects, Sensors};
