@@ -301,6 +301,10 @@ fn paper_refuses_arms_it_cannot_run_and_says_why() {
     paper_fails_with(&["--real", "real3.toml"], &[("real3.toml", arm_with_joints(3))], &["real3.toml", "3 joints", "has 4"]);
     paper_fails_with(&["--scale", "3"], &[], &["reach", "1.000 m"]);
     paper_fails_with(&["--centre", "0.45"], &[], &["--centre takes two numbers"]);
+    paper_fails_with(&["--intent-horizon", "-0.01"], &[], &["--intent-horizon", "outside 0 to 1 s"]);
+    paper_fails_with(&["--intent-horizon", "soon"], &[], &["--intent-horizon", "not a number"]);
+    paper_fails_with(&["--friction-max-speed", "0.1"], &[], &["--friction-max-speed", "outside 0.5 to 50 rad/s"]);
+    paper_fails_with(&["--friction-max-speed", "NaN"], &[], &["--friction-max-speed", "outside 0.5 to 50 rad/s"]);
     paper_fails_with(&["--joint-gains", "50"], &[], &["--joint-gains takes two numbers"]);
     paper_fails_with(&["-c", "broken.toml"], &[("broken.toml", "[arm]\ngravity_m_s2 = 9.81\n".into())], &["broken.toml"]);
 }

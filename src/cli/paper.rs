@@ -72,13 +72,13 @@ pub struct PaperArgs {
     gravity_plain_average: bool,
     /// Top speed of the friction runs [rad/s] (default: the paper's 5): the friction nets are
     /// trained and judged up to it; lower it for a joint that cannot reach 5 rad/s.
-    #[arg(long, value_name = "RAD_S", value_parser = parse_top_speed)]
+    #[arg(long, value_name = "RAD_S", value_parser = parse_top_speed, allow_hyphen_values = true)]
     friction_max_speed: Option<f64>,
     /// Feed the task-space loops' compensators (perfect, NN, adaptive alike) the speed the
     /// controller commands H seconds ahead, q̇ + H u (`qd_intended_i` of the controller FMU),
     /// instead of the measured speed (the paper's), so joints at rest are compensated the way
     /// the law moves them; e.g. 0.01. Default: the measured speed.
-    #[arg(long, value_name = "H", value_parser = parse_horizon)]
+    #[arg(long, value_name = "H", value_parser = parse_horizon, allow_hyphen_values = true)]
     intent_horizon: Option<f64>,
 }
 
