@@ -449,6 +449,25 @@ pub fn report_markdown(run: &PaperRun) -> String {
     for (name, e) in ["ideal", "NN", "none"].iter().zip(&j.settled_rad) {
         let _ = writeln!(s, "{}", row(&std::iter::once(name.to_string()).chain(e.iter().map(|x| format!("{x:.4}"))).collect::<Vec<_>>()));
     }
+    // Above this settled error of the ideal compensator [rad] the report says the gains are
+    // low for the friction.
+    const STUCK_SETTLED_RAD: f64 = 0.05;
+    let (worst_joint, worst_ideal) = j.settled_rad[0].iter().copied().enumerate().fold((0, 0.0), |a, (i, e)| if e > a.1 { (i, e) } else { a });
+    if worst_ideal > STUCK_SETTLED_RAD {
+        let friction = &r.setup.nominal.arm.friction;
+        let (band_joint, band) = (0..n)
+            .map(|i| (i, friction[i].breakaway(1.0).max(friction[i].breakaway(-1.0)) / j.kp[i]))
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        let _ = writeln!(
+            s,
+            "\n**The joint loop's gains are low for this arm's friction.** Even the ideal compensator settles {worst_ideal:.3} rad from \
+             the targets (joint {}): a joint comes to rest wherever K_p (q_d − q) falls below its breakaway torque, up to \
+             breakaway / K_p = {band:.3} rad away (joint {}). NN/ideal then compares where the joints stuck more than the gravity \
+             compensation; raise the gains with `--joint-gains`.",
+            worst_joint + 1,
+            band_joint + 1
+        );
+    }
     let _ = writeln!(
         s,
         "\nThe paper's K_p = 0.025 has no units; in N·m/rad it would move no joint against its Coulomb friction (0.3–1.5 N·m on the \
