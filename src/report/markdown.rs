@@ -452,7 +452,8 @@ pub fn report_markdown(run: &PaperRun) -> String {
     // Above this settled error of the ideal compensator [rad] the report says the gains are
     // low for the friction.
     const STUCK_SETTLED_RAD: f64 = 0.05;
-    let (worst_joint, worst_ideal) = j.settled_rad[0].iter().copied().enumerate().fold((0, 0.0), |a, (i, e)| if e > a.1 { (i, e) } else { a });
+    let (worst_joint, worst_ideal) =
+        j.settled_rad[0].iter().copied().enumerate().fold((0, 0.0), |a, (i, e)| if e > a.1 { (i, e) } else { a });
     if worst_ideal > STUCK_SETTLED_RAD {
         let friction = &r.setup.nominal.arm.friction;
         let (band_joint, band) = (0..n)
