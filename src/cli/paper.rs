@@ -82,22 +82,23 @@ pub struct PaperArgs {
     intent_horizon: Option<f64>,
 }
 
-/// A look-ahead horizon: 0 to 1 s.
-fn parse_horizon(text: &str) -> Result<f64, String> {
+/// A number of `text` within `low..=high` [`unit`], or why not.
+fn number_within(text: &str, low: f64, high: f64, unit: &str) -> Result<f64, String> {
     let v: f64 = text.parse().map_err(|e| format!("{text:?} is not a number: {e}"))?;
-    if !(0.0..=1.0).contains(&v) {
-        return Err(format!("{v} s is outside 0 to 1 s"));
+    if !(low..=high).contains(&v) {
+        return Err(format!("{v} {unit} is outside {low} to {high} {unit}"));
     }
     Ok(v)
 }
 
+/// A look-ahead horizon: 0 to 1 s.
+fn parse_horizon(text: &str) -> Result<f64, String> {
+    number_within(text, 0.0, 1.0, "s")
+}
+
 /// A friction top speed: 0.5 to 50 rad/s.
 fn parse_top_speed(text: &str) -> Result<f64, String> {
-    let v: f64 = text.parse().map_err(|e| format!("{text:?} is not a number: {e}"))?;
-    if !(0.5..=50.0).contains(&v) {
-        return Err(format!("{v} rad/s is outside 0.5 to 50 rad/s"));
-    }
-    Ok(v)
+    number_within(text, 0.5, 50.0, "rad/s")
 }
 
 /// Runs `neurarm paper`.
