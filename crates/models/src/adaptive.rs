@@ -389,7 +389,10 @@ impl AdaptiveCompensatorModel {
             let hidden = net_of(&self.core, row).hidden();
             let phi: &[f64] = match row.friction_net {
                 Some(_) => {
-                    hidden_layer(net_of(&self.core, row), &[values[self.core.ports.qd[joint]]], &mut self.phi[..hidden]);
+                    let net = net_of(&self.core, row);
+                    let mut feature = [0.0];
+                    net.encoding.encode_into(&[values[self.core.ports.qd[joint]]], &mut feature);
+                    hidden_layer(net, &feature, &mut self.phi[..hidden]);
                     self.phi[hidden] = 1.0;
                     &self.phi[..hidden + 1]
                 }

@@ -212,10 +212,11 @@ impl NetCompensator {
             .enumerate()
             .map(|(i, f)| {
                 let what = format!("friction net of joint {}", i + 1);
-                if f.encoding != InputEncoding::Raw {
+                if !matches!(f.encoding, InputEncoding::Raw | InputEncoding::LogSpeed) {
                     return Err(BuildError::Spec(format!(
-                        "{what}: its input is encoded as '{}'; a friction net takes the velocity as it is",
-                        f.encoding.name()
+                        "{what}: its input is encoded as '{}'; a friction net takes the velocity raw or as '{}'",
+                        f.encoding.name(),
+                        InputEncoding::LogSpeed.name()
                     )));
                 }
                 check_signals(f, &what, 1, 1)
@@ -269,9 +270,9 @@ impl NetCompensator {
         let p = &self.ports;
         for i in 0..p.joints() {
             let friction = if use_friction {
-                let mut out = [0.0];
-                let h = self.friction[i].hidden();
-                self.friction[i].mlp.evaluate_into(&[values[p.qd[i]]], &mut self.hidden[..h], &mut out);
+                let (mut out, mut feature) = ([0.0], [0.0]);
+                let net = &self.friction[i];
+                net.evaluate_into(&[values[p.qd[i]]], &mut feature, &mut self.hidden[..net.hidden()], &mut out);
                 out[0]
             } else {
                 0.0

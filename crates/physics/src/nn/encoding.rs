@@ -25,11 +25,27 @@ pub enum InputEncoding {
     /// linear map of them, whose coefficients (masses, centres of mass, the base's tilt) the
     /// net has to learn.
     LinkAngles,
+    /// Each input velocity v [rad/s] as sign(v) ln(1 + |v|/v₀), v₀ =
+    /// [`LOG_SPEED_SCALE_RAD_S`]: a friction net's input. Friction jumps at zero speed (the
+    /// Coulomb step); on the raw velocity a tansig net can only bridge that jump with a
+    /// neuron whose slope is the step over the lowest identified speed, which the training
+    /// does not reach, so it rises to the Coulomb level over tens of mrad/s. The logarithm
+    /// gives the speeds from v₀ to the top speed equal room, so the step becomes an ordinary
+    /// slope, while the encoding stays odd, continuous and monotonic (0 at rest).
+    LogSpeed,
 }
+
+/// The speed v₀ of [`InputEncoding::LogSpeed`] [rad/s]: below it the encoding is nearly
+/// linear (v/v₀), above it logarithmic.
+pub const LOG_SPEED_SCALE_RAD_S: f64 = 1e-3;
 
 impl InputEncoding {
     /// Every encoding, for listing in messages.
-    pub const ALL: [InputEncoding; 3] = [InputEncoding::Raw, InputEncoding::JointAngles, InputEncoding::LinkAngles];
+    pub const ALL: [InputEncoding; 4] =
+        [InputEncoding::Raw, InputEncoding::JointAngles, InputEncoding::LinkAngles, InputEncoding::LogSpeed];
+
+    /// The encodings of a gravity net (of angles).
+    pub const ANGLES: [InputEncoding; 3] = [InputEncoding::Raw, InputEncoding::JointAngles, InputEncoding::LinkAngles];
 
     /// The name used in files and on the command line.
     pub fn name(self) -> &'static str {
@@ -37,6 +53,7 @@ impl InputEncoding {
             InputEncoding::Raw => "raw",
             InputEncoding::JointAngles => "joint_angles",
             InputEncoding::LinkAngles => "link_angles",
+            InputEncoding::LogSpeed => "log_speed",
         }
     }
 
@@ -51,13 +68,18 @@ impl InputEncoding {
 
     /// True when the encoded net is 2π-periodic in every input.
     pub fn is_periodic(self) -> bool {
-        self != InputEncoding::Raw
+        matches!(self, InputEncoding::JointAngles | InputEncoding::LinkAngles)
+    }
+
+    /// True for an encoding of angles (what a gravity net takes); false for one of speeds.
+    pub fn is_of_angles(self) -> bool {
+        self != InputEncoding::LogSpeed
     }
 
     /// Number of values the first layer sees for `inputs` physical inputs.
     pub fn features(self, inputs: usize) -> usize {
         match self {
-            InputEncoding::Raw => inputs,
+            InputEncoding::Raw | InputEncoding::LogSpeed => inputs,
             InputEncoding::JointAngles | InputEncoding::LinkAngles => 2 * inputs,
         }
     }
@@ -68,6 +90,11 @@ impl InputEncoding {
     pub fn encode_into(self, x: &[f64], out: &mut [f64]) {
         match self {
             InputEncoding::Raw => out.copy_from_slice(x),
+            InputEncoding::LogSpeed => {
+                for (o, v) in out.iter_mut().zip(x) {
+                    *o = (v.abs() / LOG_SPEED_SCALE_RAD_S).ln_1p().copysign(*v);
+                }
+            }
             InputEncoding::JointAngles => {
                 for (i, q) in x.iter().enumerate() {
                     let (s, c) = q.sin_cos();
@@ -116,7 +143,7 @@ impl EncodedNet {
     /// Number of physical inputs.
     pub fn inputs(&self) -> usize {
         match self.encoding {
-            InputEncoding::Raw => self.mlp.inputs(),
+            InputEncoding::Raw | InputEncoding::LogSpeed => self.mlp.inputs(),
             InputEncoding::JointAngles | InputEncoding::LinkAngles => self.mlp.inputs() / 2,
         }
     }
@@ -231,7 +258,65 @@ mod tests {
         old["encoding"] = "link_angles".into();
         let e = WeightsFile::from_json(&old.to_string(), "old.json").unwrap_err().to_string();
         assert!(e.contains("version 1 file has raw inputs only"), "{e}");
-        assert!(InputEncoding::parse("polar").unwrap_err().contains("raw, joint_angles, link_angles"));
+        assert!(InputEncoding::parse("polar").unwrap_err().contains("raw, joint_angles, link_angles, log_speed"));
         assert_eq!(InputEncoding::parse("link-angles"), Ok(InputEncoding::LinkAngles));
+    }
+
+    #[test]
+    fn the_log_speed_is_odd_continuous_and_increasing_and_linear_below_its_scale() {
+        let encode = |v: f64| {
+            let mut out = [0.0];
+            InputEncoding::LogSpeed.encode_into(&[v], &mut out);
+            out[0]
+        };
+        assert_eq!(encode(0.0), 0.0);
+        // At the scale: ln 2; far below it v/v₀ (the first terms of ln(1 + x) = x − x²/2).
+        assert!((encode(LOG_SPEED_SCALE_RAD_S) - std::f64::consts::LN_2).abs() < 1e-15);
+        let tiny = 1e-9;
+        assert!((encode(tiny) - tiny / LOG_SPEED_SCALE_RAD_S).abs() < 1e-11);
+        let mut previous = f64::NEG_INFINITY;
+        for k in -2000..=2000 {
+            let v = k as f64 * 2.5e-3;
+            let u = encode(v);
+            assert_eq!(encode(-v), -u, "odd at {v}");
+            assert!(u > previous, "increasing at {v}");
+            previous = u;
+        }
+        // Far above the scale, logarithmic: a decade adds ln((1 + 5000) / (1 + 500)) ≈ ln 10.
+        assert!((encode(5.0) - encode(0.5) - (5001.0f64 / 501.0).ln()).abs() < 1e-12);
+        assert_eq!(InputEncoding::LogSpeed.features(1), 1);
+        assert!(!InputEncoding::LogSpeed.is_periodic() && !InputEncoding::LogSpeed.is_of_angles());
+    }
+
+    #[test]
+    fn a_friction_net_may_take_the_log_speed_and_a_gravity_net_may_not() {
+        let net = random_net(InputEncoding::LogSpeed, 1, 5);
+        let mlp = Mlp {
+            output_scaling: MinMaxScaling { min: vec![-1.0], max: vec![1.0] },
+            lw: net.mlp.lw.rows(0, 1).into_owned(),
+            b2: net.mlp.b2.rows(0, 1).into_owned(),
+            ..net.mlp.clone()
+        };
+        let net = EncodedNet { encoding: InputEncoding::LogSpeed, mlp };
+        let signal = |n: &str, u: &str| vec![crate::nn::Signal { name: n.into(), unit: u.into() }];
+        let report = TrainReport {
+            epochs: 0,
+            best_epoch: 0,
+            stop_reason: crate::nn::StopReason::Epochs,
+            restart: 0,
+            train_mse: 0.0,
+            validation_mse: None,
+            test_mse: None,
+            counts: [1, 0, 0],
+        };
+        let file = WeightsFile::new(&net.mlp, signal("qd_1", "rad/s"), signal("tau_friction_1", "N.m"), TrainSettings::default(), report)
+            .with_encoding(InputEncoding::LogSpeed);
+        let friction = file.clone().friction_of_joint(1);
+        let back = WeightsFile::from_json(&friction.to_json(), "mem").unwrap().network().unwrap();
+        assert_eq!(back.encoding, InputEncoding::LogSpeed);
+        // The encoded net at 3 mrad/s is the plain net at ln 4.
+        assert_eq!(back.evaluate(&[3e-3]), net.mlp.evaluate(&[4f64.ln()]));
+        let e = file.gravity().network().unwrap_err();
+        assert!(e.contains("a gravity net takes angles"), "{e}");
     }
 }

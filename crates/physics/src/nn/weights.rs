@@ -222,8 +222,15 @@ impl WeightsFile {
                     self.outputs.len()
                 ))
             }
-            (NetKind::Friction, Some(_)) if self.encoding != InputEncoding::Raw => {
-                return Err(format!("a friction net takes the velocity as it is, not encoded as '{}'", self.encoding.name()))
+            (NetKind::Friction, Some(_)) if !matches!(self.encoding, InputEncoding::Raw | InputEncoding::LogSpeed) => {
+                return Err(format!(
+                    "a friction net takes the velocity raw or as '{}', not encoded as '{}'",
+                    InputEncoding::LogSpeed.name(),
+                    self.encoding.name()
+                ))
+            }
+            (NetKind::Gravity, _) if !self.encoding.is_of_angles() => {
+                return Err(format!("a gravity net takes angles, not speeds encoded as '{}'", self.encoding.name()))
             }
             (NetKind::Gravity, _) if self.inputs.len() != self.outputs.len() => {
                 return Err(format!(
