@@ -190,6 +190,19 @@ impl FrictionIdentification {
     pub fn kept(&self) -> usize {
         self.levels.iter().filter(|l| l.verdict == Verdict::Kept).count()
     }
+
+    /// The noise of the measured speed [rad/s], a standard deviation: the median spread of the
+    /// speed about its trend over the levels at rest, where the true speed is zero and all
+    /// spread is the sensor's; without such levels, over the kept ones (an upper bound: their
+    /// spread holds the motion's ripple too); 0 without either.
+    pub fn speed_noise_rad_s(&self) -> f64 {
+        let median_spread = |verdict: Verdict| {
+            let mut spreads: Vec<f64> = self.levels.iter().filter(|l| l.verdict == verdict).map(|l| l.spread_rad_s).collect();
+            spreads.sort_by(f64::total_cmp);
+            (!spreads.is_empty()).then(|| spreads[spreads.len() / 2])
+        };
+        median_spread(Verdict::AtRest).or_else(|| median_spread(Verdict::Kept)).unwrap_or(0.0)
+    }
 }
 
 /// The steadiness test of one window (see [`FrictionOptions`]): (mean, drift, drift limit,
