@@ -62,7 +62,7 @@ fn friction_and_gravity_from_logs_of_a_noisy_three_joint_arm() {
         assert!(moving.iter().filter(|p| p.0 > 0.0).count() >= 8 && moving.iter().filter(|p| p.0 < 0.0).count() >= 8, "{:?}", found.pairs);
         // The pair at rest lies between the true breakaway torques.
         assert!(rest.torque_nm < law.breakaway(1.0) && rest.torque_nm > -law.breakaway(-1.0), "{rest:?}");
-        let net = train_friction_net(joint - 1, &found.pairs, 1).unwrap();
+        let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), 1).unwrap();
         let error = friction_net_error(&net, &law, 0.2, 2.0).unwrap();
         if std::env::var_os("NEURARM_DEBUG").is_some() {
             let mlp = net.network().unwrap();

@@ -149,9 +149,20 @@ impl EpochBar {
     }
 }
 
-/// Parses an input encoding for clap.
+/// Parses a net's input encoding for clap.
 pub fn parse_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
     InputEncoding::parse(text)
+}
+
+/// Parses a gravity net's input encoding (one of angles) for clap.
+pub fn parse_angle_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
+    let encoding = InputEncoding::parse(text)?;
+    if encoding.is_of_angles() {
+        Ok(encoding)
+    } else {
+        let names: Vec<&str> = InputEncoding::ANGLES.iter().map(|e| e.name()).collect();
+        Err(format!("'{text}' encodes speeds, not angles: use one of {}", names.join(", ")))
+    }
 }
 
 /// A run ended by Ctrl-C: its message, and exit status 130 (128 + SIGINT) as a shell gives.

@@ -9,7 +9,7 @@ use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::ReferencePlacement;
 use neurarm_physics::nn::InputEncoding;
 
-use super::common::{load_config, parse_encoding};
+use super::common::{load_config, parse_angle_encoding};
 
 /// The arguments of `neurarm paper`. Its help text is the doc of `Command::Paper` in
 /// main.rs, which clap shows instead of this one.
@@ -60,7 +60,7 @@ pub struct PaperArgs {
     /// How the gravity net sees the angles: link-angles (default: (cos, sin) of each link's
     /// angle q₁+…+qⱼ, periodic), joint-angles ((cos, sin) of each joint angle, periodic) or
     /// raw (the paper's net, not periodic; a periodic net's run also trains it for comparison).
-    #[arg(long, value_parser = parse_encoding)]
+    #[arg(long, value_parser = parse_angle_encoding)]
     gravity_inputs: Option<InputEncoding>,
     /// Also measure the gravity error against the number of poses (grids and sampled designs
     /// up to N poses, every input encoding) for the report: adds minutes to a full run.

@@ -56,8 +56,9 @@ pub struct TrainArgs {
     #[arg(long)]
     joint: Option<usize>,
     /// How the net sees the inputs: raw, joint-angles ((cos, sin) of each input angle
-    /// [rad]) or link-angles ((cos, sin) of the running sums q₁+…+qⱼ); the angle forms are
-    /// 2π-periodic in every input.
+    /// [rad]), link-angles ((cos, sin) of the running sums q₁+…+qⱼ), the angle forms
+    /// 2π-periodic in every input, or log-speed (each speed v [rad/s] as
+    /// sign(v) ln(1 + |v| / 1 mrad/s): a friction net that must follow the Coulomb step).
     #[arg(long, value_parser = parse_encoding, default_value = "raw")]
     encoding: InputEncoding,
     /// How μ changes: trainlm (MATLAB's ×0.1 / ×10, the default) or nielsen (Nielsen's

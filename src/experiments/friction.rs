@@ -10,7 +10,8 @@ pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{coriolis_of_one_joint_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
-use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
+use neurarm_physics::nn::encoding::LOG_SPEED_SCALE_RAD_S;
+use neurarm_physics::nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};
 
 /// How the friction runs hold the joints that are not driven.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -356,9 +357,44 @@ pub fn friction_run(
     Ok(run)
 }
 
-/// Trains one friction net (velocity → torque) on binned pairs.
-pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) -> Result<WeightsFile, String> {
-    let x = DMatrix::from_fn(1, pairs.len(), |_, c| pairs[c].0);
+/// The narrowest step of a friction net at zero speed [rad/s]: half its width, the speed at
+/// which a net trained on the Coulomb step ([`train_friction_net`]) is at the moving friction.
+pub fn friction_step_width(speed_noise_rad_s: f64) -> f64 {
+    // A joint at rest reads within ±2σ of zero 95 % of the time: a step narrower than that
+    // would flip the compensation on measurement noise alone.
+    LOG_SPEED_SCALE_RAD_S.max(2.0 * speed_noise_rad_s)
+}
+
+/// Trains one friction net (velocity → torque) on binned pairs, the pair at rest among them,
+/// for a joint whose measured speed carries noise of `speed_noise_rad_s` (standard
+/// deviation, [`FrictionIdentification::speed_noise_rad_s`]).
+///
+/// Friction jumps at zero speed, and the pairs say nothing of the gap between the pair at
+/// rest and the lowest moving pair (tens of mrad/s), which a net on the raw speed bridges with
+/// a slope: it reached half the Coulomb level only at 10–50 mrad/s, and a compensator fed
+/// the measured speed gave half the friction to a joint starting to move. Where the lowest
+/// pairs lie well above [`friction_step_width`], the training data get the step: pairs at
+/// ±the width carrying each direction's lowest friction (extrapolated from its two lowest
+/// pairs), and points on the straight line from there to the lowest pair, and the net takes
+/// the speed on a log scale ([`InputEncoding::LogSpeed`]), on which the step is an ordinary
+/// slope. Otherwise (noisy speeds) the net is the paper's, on the raw speed and the pairs
+/// alone.
+pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_s: f64, seed: u64) -> Result<WeightsFile, String> {
+    let width = friction_step_width(speed_noise_rad_s);
+    let lowest = |direction: f64| pairs.iter().filter(|p| p.0 * direction > 0.0).map(|p| p.0.abs()).fold(f64::INFINITY, f64::min);
+    // Both directions need room for the step's points below their lowest pair.
+    let stepped = lowest(1.0).min(lowest(-1.0)) > 2.0 * width && lowest(1.0).max(lowest(-1.0)).is_finite();
+    let mut training: Vec<FrictionPair> = pairs.to_vec();
+    let encoding = if stepped {
+        training.extend(step_pairs(pairs, width));
+        training.sort_by(|a, b| a.0.total_cmp(&b.0));
+        InputEncoding::LogSpeed
+    } else {
+        InputEncoding::Raw
+    };
+    let pairs = &training[..];
+    let raw = DMatrix::from_fn(1, pairs.len(), |_, c| pairs[c].0);
+    let x = encoding.encode_all(&raw);
     let t = DMatrix::from_fn(1, pairs.len(), |_, c| pairs[c].1);
     // A few hundred pairs with a jump at zero: 6 validation failures in a row stop most
     // starts in the first epochs, so this allows 20. Of 10 starts, each stopped early on its own
@@ -382,8 +418,9 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
             }
         }
         let trained = train(&x, &t, &settings, &mut |_| {}).map_err(|e| format!("friction net of joint {}: {e}", joint + 1))?;
-        let at_pairs = (pairs.iter().map(|p| (trained.net.evaluate(&[p.0])[0] - p.1).powi(2)).sum::<f64>() / pairs.len() as f64).sqrt();
-        let score = at_pairs + interpolant_rms(&trained.net, pairs);
+        let net = EncodedNet { encoding, mlp: trained.net.clone() };
+        let at_pairs = (pairs.iter().map(|p| (net.evaluate(&[p.0])[0] - p.1).powi(2)).sum::<f64>() / pairs.len() as f64).sqrt();
+        let score = at_pairs + interpolant_rms(&net, pairs);
         if best.as_ref().is_none_or(|b| score < b.0) {
             best = Some((score, settings, trained));
         }
@@ -397,12 +434,45 @@ pub fn train_friction_net(joint: usize, pairs: &[(f64, f64, usize)], seed: u64) 
         settings,
         trained.report,
     )
+    .with_encoding(encoding)
     .friction_of_joint(joint + 1))
+}
+
+/// The Coulomb step's training points of [`train_friction_net`]: in each direction a pair at
+/// ±`width` [rad/s] carrying the lowest moving pair's friction extrapolated linearly from the
+/// two lowest (the lowest pair's own torque where that would change its sign or more than
+/// double it), and points on the straight line from there to the lowest pair, four a decade.
+fn step_pairs(pairs: &[FrictionPair], width: f64) -> Vec<FrictionPair> {
+    let mut out = Vec::new();
+    for direction in [1.0, -1.0] {
+        let mut side: Vec<&FrictionPair> = pairs.iter().filter(|p| p.0 * direction > 0.0).collect();
+        side.sort_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
+        let Some(low) = side.first() else { continue };
+        if low.0.abs() <= width {
+            continue;
+        }
+        let mut torque = low.1;
+        if let Some(next) = side.get(1) {
+            let slope = (next.1 - low.1) / (next.0 - low.0);
+            let extrapolated = low.1 + slope * (direction * width - low.0);
+            if extrapolated * low.1 > 0.0 && extrapolated.abs() <= 2.0 * low.1.abs() {
+                torque = extrapolated;
+            }
+        }
+        // The gap up to the lowest pair, four points a decade on the straight line there.
+        let (v_low, mut v) = (low.0.abs(), width);
+        while v < 0.8 * v_low {
+            let share = (v - width) / (v_low - width);
+            out.push((direction * v, torque + share * (low.1 - torque), low.2));
+            v *= 10f64.powf(0.25);
+        }
+    }
+    out
 }
 
 /// RMS over a 1 mrad/s grid spanning the pairs of net(q̇) − the pairs' piecewise-linear
 /// interpolant [N·m]: how a net behaves between the pairs, the stick band included.
-pub fn interpolant_rms(net: &neurarm_physics::nn::Mlp, pairs: &[FrictionPair]) -> f64 {
+pub fn interpolant_rms(net: &EncodedNet, pairs: &[FrictionPair]) -> f64 {
     let (Some(first), Some(last)) = (pairs.first(), pairs.last()) else { return f64::INFINITY };
     let curve = FrictionCurve::new(pairs);
     let steps = ((last.0 - first.0) / 1e-3).floor() as usize;
@@ -458,4 +528,83 @@ pub fn friction_net_error(net: &WeightsFile, law: &JointFriction, min_speed: f64
 /// identification itself, before any fitting.
 pub fn pair_error(pairs: &[FrictionPair], law: &JointFriction) -> (f64, f64) {
     pairs.iter().filter(|p| p.0 != 0.0).map(|p| ((p.1 - law.torque(p.0)).abs(), p.0)).fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use neurarm_physics::arm::FrictionBranch;
+
+    /// A Stribeck joint, asymmetric, and its pairs as a constant-torque identification gives
+    /// them: the law at 30 mrad/s to 5 rad/s and the pair at rest (the breakaway midpoint).
+    fn stribeck_joint() -> (JointFriction, Vec<FrictionPair>) {
+        let branch = |coulomb_nm, static_nm, viscous_nms_rad| FrictionBranch {
+            coulomb_nm,
+            static_nm,
+            stribeck_velocity_rad_s: 0.15,
+            viscous_nms_rad,
+            viscous_falloff_rad_s: None,
+        };
+        let law = JointFriction { positive: branch(1.0, 1.5, 0.7), negative: branch(0.8, 1.2, 0.9) };
+        let mut pairs: Vec<FrictionPair> = vec![(0.0, 0.5 * (law.breakaway(1.0) - law.breakaway(-1.0)), 10)];
+        for k in 0..=50 {
+            let v = 0.03 * (5.0f64 / 0.03).powf(k as f64 / 50.0);
+            pairs.push((v, law.torque(v), 500));
+            pairs.push((-v, law.torque(-v), 500));
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        (law, pairs)
+    }
+
+    #[test]
+    fn a_quiet_joints_net_crosses_the_coulomb_step_within_a_few_milliradians_per_second() {
+        let (law, pairs) = stribeck_joint();
+        let net = train_friction_net(0, &pairs, 0.0, 1).unwrap();
+        assert_eq!(net.encoding, InputEncoding::LogSpeed);
+        let mlp = net.network().unwrap();
+        // Against the law itself, from twice the step width (2 mrad/s) up: the lowest pair is
+        // at 30 mrad/s, so all below it is the step's training points.
+        for v in [0.002, 0.005, 0.01, 0.02] {
+            for sign in [1.0, -1.0] {
+                let (got, want) = (mlp.evaluate(&[sign * v])[0], law.torque(sign * v));
+                assert!((got - want).abs() < 0.1 * want.abs(), "at {:+} rad/s: net {got:.4}, law {want:.4}", sign * v);
+            }
+        }
+        let error = friction_net_error(&net, &law, 0.005, 5.0).unwrap();
+        assert!(error.share() < 0.01, "{error:?}");
+    }
+
+    #[test]
+    fn a_noisy_joints_net_keeps_the_raw_speed_and_the_pairs_alone() {
+        let (law, pairs) = stribeck_joint();
+        // 20 mrad/s of noise: a 40 mrad/s step, wider than the gap below the lowest pair.
+        let net = train_friction_net(0, &pairs, 0.02, 1).unwrap();
+        assert_eq!(net.encoding, InputEncoding::Raw);
+        let error = friction_net_error(&net, &law, 0.2, 5.0).unwrap();
+        assert!(error.share() < 0.01, "{error:?}");
+        assert_eq!(friction_step_width(0.02), 0.04);
+        assert_eq!(friction_step_width(0.0), LOG_SPEED_SCALE_RAD_S);
+    }
+
+    #[test]
+    fn the_steps_points_carry_the_lowest_pairs_friction_down_to_the_width() {
+        let pairs: Vec<FrictionPair> = vec![(-0.05, -1.0, 5), (-0.03, -1.2, 5), (0.0, 0.0, 3), (0.04, 2.0, 5), (0.08, 2.2, 5)];
+        let points = step_pairs(&pairs, 0.002);
+        // Positive side: slope 5 N·m·s/rad extrapolated to 2 mrad/s: 1.81 N·m; negative side:
+        // falling toward speed, −1.2 − 10 × 0.028 = −1.48, kept (same sign, under twice the lowest).
+        let at = |v: f64| points.iter().find(|p| (p.0 - v).abs() < 1e-12).map(|p| p.1);
+        assert!((at(0.002).unwrap() - 1.81).abs() < 1e-12);
+        assert!((at(-0.002).unwrap() + 1.48).abs() < 1e-12);
+        // Four points a decade, all below 80 % of the lowest pair, on the line to it.
+        assert!(points.iter().all(|p| p.0.abs() >= 0.002 && p.0.abs() < 0.8 * 0.04));
+        for p in points.iter().filter(|p| p.0 > 0.0) {
+            let line = 1.81 + (p.0 - 0.002) / (0.04 - 0.002) * (2.0 - 1.81);
+            assert!((p.1 - line).abs() < 1e-12, "{p:?}");
+        }
+        assert_eq!(points.iter().filter(|p| p.0 > 0.0).count(), 5);
+        // Just below 80 % of the lowest pairs: the pair at ±width alone; above them: nothing.
+        let narrow: Vec<f64> = step_pairs(&pairs, 0.02).iter().map(|p| p.0).collect();
+        assert_eq!(narrow, [0.02, -0.02]);
+        assert!(step_pairs(&pairs, 0.045).is_empty());
+    }
 }

@@ -28,13 +28,15 @@ use neurarm_physics::arm::{gravity_torques, mass_matrix, ArmParams, ArmState};
 use neurarm_physics::config::ArmConfig;
 
 pub use friction::{
-    friction_run, held_inertia, pairs_of_runs, run_options, train_friction_net, FrictionHold, FrictionPair, FrictionRun, LevelRecord,
+    friction_run, friction_step_width, held_inertia, pairs_of_runs, run_options, train_friction_net, FrictionHold, FrictionPair,
+    FrictionRun, LevelRecord,
 };
 pub use gravity::{
     design_poses, gravity_grid, gravity_net_errors, gravity_sweep, measure_gravity, sampled_poses, train_gravity_net, GravityPair,
     GravitySweep, GRAVITY_SWEEP_SPEED_RAD_S,
 };
 pub use joint_space::{gravity_compensation_system, joint_rms_errors, joint_settled_errors};
+pub use paper::LOW_SPEED_RANGE_RAD_S;
 pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_GRAVITY_POSES, MAX_JOINTS, MIN_JOINTS};
 pub use tracking::{tracking_errors, tracking_mse, tracking_start, tracking_system, TrackingErrors, TRACKING_SEED_POSE};
 

@@ -140,7 +140,20 @@ pub struct FrictionJoint {
     pub net_error: FrictionNetError,
     /// `net_error.rms_nm` as a share of the joint's largest friction torque.
     pub net_error_share: f64,
+    /// The trained net against the true law at low speed, [`LOW_SPEED_RANGE_RAD_S`], where
+    /// it crosses the Coulomb step.
+    pub low_speed_error: FrictionNetError,
+    /// The measured speed's noise the identification found (a standard deviation) [rad/s].
+    pub speed_noise_rad_s: f64,
+    /// How the net sees the speed: "log_speed" when it was trained on the Coulomb step,
+    /// "raw" (the paper's) when the noise left no room below the lowest pairs (see
+    /// [`crate::experiments::train_friction_net`]).
+    pub encoding: String,
 }
+
+/// The low speeds a friction net is also judged over [rad/s]: from 5 mrad/s (a few step
+/// widths of a noiseless arm's net) to where the pairs' judging range starts.
+pub const LOW_SPEED_RANGE_RAD_S: (f64, f64) = (0.005, 0.2);
 
 /// The gravity identification.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -356,6 +369,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     b.finish_and_clear();
     let mut friction_pairs: [Vec<Vec<FrictionPair>>; 2] = [Vec::new(), Vec::new()];
     let mut levels_of = Vec::new();
+    let mut speed_noise: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for (k, real) in [false, true].into_iter().enumerate() {
         for joint in 0..n {
             let mine: Vec<&FrictionRun> = runs.iter().zip(&tasks).filter(|(_, t)| t.0 == real && t.1 == joint).map(|(r, _)| r).collect();
@@ -363,6 +377,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
             let inertia = rigid.then(|| held_inertia(model, joint));
             let identified = pairs_of_runs(&mine, &run_options(settings, inertia));
             levels_of.push(identified.kept());
+            speed_noise[k].push(identified.speed_noise_rad_s());
             let binned = identified.pairs;
             if binned.len() < 4 {
                 return Err(format!(
@@ -380,7 +395,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     let friction_nets = parallel(
         (0..2 * n).collect(),
         settings.threads,
-        |i: usize| train_friction_net(i % n, &friction_pairs[i / n][i % n], settings.seed),
+        |i: usize| train_friction_net(i % n, &friction_pairs[i / n][i % n], speed_noise[i / n][i % n], settings.seed),
         || b.inc(1),
     )?;
     b.finish_and_clear();
@@ -396,6 +411,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         let law = if k == 0 { &arms.nominal.arm.friction[joint] } else { &arms.real.arm.friction[joint] };
         let (pair_error_nm, pair_error_at_rad_s) = pair_error(&friction_pairs[k][joint], law);
         let net_error = friction_net_error(net, law, 0.2, settings.max_velocity)?;
+        let low_speed_error = friction_net_error(net, law, LOW_SPEED_RANGE_RAD_S.0, LOW_SPEED_RANGE_RAD_S.1)?;
         friction.push(FrictionJoint {
             arm: tag.into(),
             joint: joint + 1,
@@ -405,6 +421,9 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
             pair_error_at_rad_s,
             net_error,
             net_error_share: net_error.share(),
+            low_speed_error,
+            speed_noise_rad_s: speed_noise[k][joint],
+            encoding: net.encoding.name().into(),
         });
     }
     lap("training friction nets", log);

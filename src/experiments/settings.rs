@@ -147,10 +147,7 @@ impl Settings {
     /// fit is underdetermined: a 2-joint arm's 25-neuron net (177 weights) fitted to the
     /// paper's 7² poses (98 torques) was 4.5 % RMS off over the whole turn, 10² poses 0.002 %.
     pub fn fewest_gravity_poses(&self, joints: usize) -> usize {
-        let inputs = match self.gravity_encoding {
-            InputEncoding::Raw => joints,
-            InputEncoding::JointAngles | InputEncoding::LinkAngles => 2 * joints,
-        };
+        let inputs = self.gravity_encoding.features(joints);
         let weights = self.gravity_hidden * (inputs + 1) + joints * (self.gravity_hidden + 1);
         (2 * weights).div_ceil(joints.max(1))
     }

@@ -264,26 +264,38 @@ pub fn report_markdown(run: &PaperRun) -> String {
          rad/s at their mean speeds; mean friction per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway \
          torques; see `neurarm::identify::identify_levels`). The pairs and nets are checked against the true law of the arm they were measured on: pair error \
          is the largest |pair − law| over the moving pairs, net error the RMS of net − law over {2} ≤ |q̇| ≤ {3} rad/s, also as a share \
-         of the joint's largest friction torque. Data: `data/friction_*_joint*.csv`; nets: `nets/friction_*.json`.\n",
-        settings.bin_width, settings.max_velocity, 0.2, settings.max_velocity
+         of the joint's largest friction torque, and at low speed ({4} ≤ |q̇| ≤ {5} rad/s), where the net crosses the Coulomb step. \
+         Where the lowest moving pairs lie above twice the step width w = max(1 mrad/s, 2σ), σ the measured speed's noise, \
+         the net is trained on the step as well: pairs at ±w with the lowest pairs' friction, and the speed on a log scale \
+         (input `log_speed`); otherwise on the pairs alone and the raw speed (`raw`, the paper's). Data: `data/friction_*_joint*.csv`; nets: `nets/friction_*.json`.\n",
+        settings.bin_width,
+        settings.max_velocity,
+        0.2,
+        settings.max_velocity,
+        crate::experiments::LOW_SPEED_RANGE_RAD_S.0,
+        crate::experiments::LOW_SPEED_RANGE_RAD_S.1
     );
     let _ = writeln!(
         s,
-        "| arm | joint | levels | pairs | largest pair error [N·m] (at q̇ [rad/s]) | net RMS error [N·m] | share of largest friction |"
+        "| arm | joint | levels | pairs | largest pair error [N·m] (at q̇ [rad/s]) | net RMS error [N·m] | share of largest friction | \
+         low-speed RMS error [N·m] | speed noise σ [rad/s] | net input |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
     for f in &r.friction {
         let arm = if f.arm == "sim" { "simulated" } else { real };
         let _ = writeln!(
             s,
-            "| {arm} | {} | {} | {} | {:.4} ({:+.2}) | {:.4} | {:.2} % |",
+            "| {arm} | {} | {} | {} | {:.4} ({:+.2}) | {:.4} | {:.2} % | {:.4} | {:.2e} | {} |",
             f.joint,
             f.levels,
             f.pairs,
             f.pair_error_nm,
             f.pair_error_at_rad_s,
             f.net_error.rms_nm,
-            100.0 * f.net_error_share
+            100.0 * f.net_error_share,
+            f.low_speed_error.rms_nm,
+            f.speed_noise_rad_s,
+            f.encoding
         );
     }
 
@@ -351,6 +363,8 @@ pub fn report_markdown(run: &PaperRun) -> String {
         }
         InputEncoding::JointAngles => "each joint angle as (cos qᵢ, sin qᵢ): the net is periodic in every angle",
         InputEncoding::Raw => "the raw angles, as in the paper: the net is not periodic",
+        // A gravity net's file with a speed encoding is refused when read.
+        InputEncoding::LogSpeed => "speeds on a log scale (not angles)",
     };
     let _ = writeln!(
         s,

@@ -47,6 +47,7 @@ pub fn write_report(out: &Path, run: &PaperRun) -> Result<(), String> {
             neurarm_physics::nn::InputEncoding::Raw => 0.0,
             neurarm_physics::nn::InputEncoding::JointAngles => 1.0,
             neurarm_physics::nn::InputEncoding::LinkAngles => 2.0,
+            neurarm_physics::nn::InputEncoding::LogSpeed => 3.0,
         };
         let rows = study.points.iter().map(|p| {
             let grid = match p.design {
