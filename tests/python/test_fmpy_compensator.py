@@ -216,3 +216,38 @@ def test_periodic_gravity_net_equals_numpy_and_repeats_every_turn(neurarm, perio
     # The net learnt the targets (a cos of the link angles), not just something periodic.
     truth = np.stack([np.cos(q[:, : i + 1].sum(axis=1)) * (4 - i) for i in range(J)], axis=1)
     assert np.abs(got - truth).max() < 0.05
+
+
+def test_log_speed_friction_net_equals_numpy_and_follows_the_step(neurarm, tmp_path):
+    """A friction net on the log speed (what a paper run trains on a quiet joint) evaluated by
+    the FMU equals a numpy forward pass of the file, and it learnt a Coulomb step at 2 mrad/s."""
+    v = np.concatenate([-np.geomspace(5, 1e-3, 60), [0.0], np.geomspace(1e-3, 5, 60)])
+    tau = np.where(v > 0, 1.2, np.where(v < 0, -0.9, 0.0)) + 0.4 * v
+    write_csv(tmp_path / "f.csv", {"qd_1": v, "tau_1": tau})
+    net = tmp_path / "f.json"
+    subprocess.run([neurarm, "train", "-d", tmp_path / "f.csv", "--inputs", "qd_1", "--targets", "tau_1", "--hidden", "6",
+                    "--epochs", "200", "--encoding", "log-speed", "-o", net], check=True)
+    weights = json.loads(net.read_text())
+    assert weights["encoding"] == "log_speed" and weights["kind"] == "friction"
+    out = tmp_path / "LogSpeed.fmu"
+    subprocess.run([neurarm, "export", "compensator", "--friction", net, "-o", out], check=True)
+    assert validate_fmu(str(out)) == []
+    md = read_model_description(str(out))
+    vr = {x.name: x.valueReference for x in md.modelVariables}
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(out)), modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t")
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    speeds = np.concatenate([np.random.default_rng(5).uniform(-6, 6, 300), [0.0, 2e-3, -2e-3, 1e-6, -1e-6]])
+    got = []
+    for s in speeds:
+        slave.setReal([vr["qd_1"]], [s])
+        got.append(slave.getReal([vr["tau_friction_1"]])[0])
+    got = np.array(got)
+    encoded = (np.sign(speeds) * np.log1p(np.abs(speeds) / 1e-3))[:, None]
+    plain = dict(weights, encoding="raw")
+    assert np.abs(got - numpy_forward(plain, encoded)[:, 0]).max() <= 1e-12
+    assert abs(got[-4] - 1.2) < 0.1 and abs(got[-3] + 0.9) < 0.1, got[-5:]
+    slave.terminate()
+    slave.freeInstance()
