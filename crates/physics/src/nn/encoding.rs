@@ -227,11 +227,9 @@ mod tests {
         assert!(raw.evaluate(&[0.1 + std::f64::consts::TAU, 0.2, 0.3]).iter().zip(&y).any(|(a, b)| (a - b).abs() > 1e-6));
     }
 
-    #[test]
-    fn the_weights_file_keeps_the_encoding_and_reads_version_1_files_as_raw() {
-        let net = random_net(InputEncoding::LinkAngles, 2, 3);
-        let signals = |p: &str, n: usize| (0..n).map(|i| crate::nn::Signal { name: format!("{p}_{i}"), unit: "rad".into() }).collect();
-        let report = TrainReport {
+    /// The report of a net that was never trained (for weights files built by hand).
+    fn untrained_report() -> TrainReport {
+        TrainReport {
             epochs: 0,
             best_epoch: 0,
             stop_reason: crate::nn::StopReason::Epochs,
@@ -240,7 +238,14 @@ mod tests {
             validation_mse: None,
             test_mse: None,
             counts: [1, 0, 0],
-        };
+        }
+    }
+
+    #[test]
+    fn the_weights_file_keeps_the_encoding_and_reads_version_1_files_as_raw() {
+        let net = random_net(InputEncoding::LinkAngles, 2, 3);
+        let signals = |p: &str, n: usize| (0..n).map(|i| crate::nn::Signal { name: format!("{p}_{i}"), unit: "rad".into() }).collect();
+        let report = untrained_report();
         let file = WeightsFile::new(&net.mlp, signals("q", 2), signals("tau", 3), TrainSettings::default(), report)
             .with_encoding(InputEncoding::LinkAngles);
         let back = WeightsFile::from_json(&file.to_json(), "mem").unwrap();
@@ -299,16 +304,7 @@ mod tests {
         };
         let net = EncodedNet { encoding: InputEncoding::LogSpeed, mlp };
         let signal = |n: &str, u: &str| vec![crate::nn::Signal { name: n.into(), unit: u.into() }];
-        let report = TrainReport {
-            epochs: 0,
-            best_epoch: 0,
-            stop_reason: crate::nn::StopReason::Epochs,
-            restart: 0,
-            train_mse: 0.0,
-            validation_mse: None,
-            test_mse: None,
-            counts: [1, 0, 0],
-        };
+        let report = untrained_report();
         let file = WeightsFile::new(&net.mlp, signal("qd_1", "rad/s"), signal("tau_friction_1", "N.m"), TrainSettings::default(), report)
             .with_encoding(InputEncoding::LogSpeed);
         let friction = file.clone().friction_of_joint(1);
