@@ -8,7 +8,8 @@
 //! takes: `s = Ĥ⁻¹ Jᵀ (ė + λ e)` with e = x_d − x ([`task_learning_signal_into`]); and
 //! `qd_intended_i = q̇ᵢ + h uᵢ` (h = `intent_horizon`), the speed the law drives joint i
 //! towards, for a friction compensator that should push a joint at rest the way the law
-//! accelerates it (it depends on q and q̇ only, so feeding a compensator makes no loop).
+//! accelerates it (it depends on q and q̇ only, so feeding a compensator makes no loop); a
+//! lead `h uᵢ` against a moving joint's motion is dropped ([`intended_speed`]).
 
 use std::path::Path;
 
@@ -65,7 +66,23 @@ impl ModelKind for TaskSpaceControllerSpec {
 (in resources/neurarm.toml). Non-finite inputs fail the step with fmi2Error.</p>\
 <p><code>qd_intended_i = qd_i + intent_horizon · u_i</code>: the speed the law drives joint i towards, for a friction \
 compensator fed it instead of the measured speed (then a joint at rest is compensated the way the law accelerates it); \
-it depends on q and qd only.</p>"
+where the lead <code>intent_horizon · u_i</code> points against the joint's motion (qd_i ≠ 0, a reversal ahead) it is dropped \
+and <code>qd_intended_i = qd_i</code>, so the compensation keeps the direction in which the joint's friction still acts \
+until the joint stops; it depends on q and qd only.</p>"
+    }
+}
+
+/// The speed a joint moving at `speed` [rad/s] is commanded towards, given the law's lead
+/// `h u` [rad/s]: `speed + lead`, except that a lead against the joint's motion is dropped
+/// (the joint's own speed is returned). Near a reversal the lead points the new way while the
+/// joint still moves the old way; a friction law fed the sum would give the new direction's
+/// friction while the arm's friction still acts the old way, a kick of twice the Coulomb level.
+/// A joint at rest (speed 0) takes the lead, which is what breaks it away.
+pub fn intended_speed(speed: f64, lead: f64) -> f64 {
+    if lead * speed >= 0.0 {
+        speed + lead
+    } else {
+        speed
     }
 }
 
@@ -140,7 +157,7 @@ impl TaskSpaceControllerModel {
                 format!("qd_intended_{}", i + 1),
                 RADIAN_PER_SECOND,
                 format!(
-                    "Speed joint {} is commanded towards: qd_{} + intent_horizon · u_{} (u the law's joint acceleration)",
+                    "Speed joint {} is commanded towards: qd_{} + intent_horizon · u_{} (u the law's joint acceleration; the second term dropped where it points against the joint's motion)",
                     i + 1,
                     i + 1,
                     i + 1
@@ -258,8 +275,8 @@ impl StaticModel for TaskSpaceControllerModel {
         }
         values.write_reals(&self.tau, tau);
         let horizon = values[self.intent_horizon];
-        for ((v, w), u) in tau.iter_mut().zip(qd.iter()).zip(self.data.acceleration()) {
-            *v = w + horizon * u;
+        for ((v, &w), u) in tau.iter_mut().zip(qd.iter()).zip(self.data.acceleration()) {
+            *v = intended_speed(w, horizon * u);
         }
         values.write_reals(&self.intended_speed, tau);
         // The torque buffer is written: reuse the compensation buffer for the signal.
