@@ -189,8 +189,8 @@ fn instantiate_rejects_bad_arguments_with_a_logged_reason() {
     let cases: Vec<(&str, String, String, &str)> = vec![
         ("", guid.clone(), uri.clone(), "instance name is NULL or empty"),
         ("a", "{00000000-0000-0000-0000-000000000000}".into(), uri.clone(), "does not match"),
-        ("a", guid.clone(), "http://example.org/resources".into(), "not a file:// URI"),
-        ("a", guid.clone(), "file:relative/resources".into(), "not an absolute file URI"),
+        ("a", guid.clone(), "http://example.org/resources".into(), "not a file URI"),
+        ("a", guid.clone(), "file:relative/resources".into(), "not an absolute path"),
         ("a", guid.clone(), "file://otherhost/resources".into(), "remote host"),
         ("a", guid.clone(), format!("{uri}/missing"), "does not exist"),
     ];
@@ -198,6 +198,14 @@ fn instantiate_rejects_bad_arguments_with_a_logged_reason() {
         let (c, log, _cb) = fmu.instantiate_with(name, &g, &u);
         assert!(c.is_null(), "accepted {name:?} {g} {u}");
         assert!(log.contains(why), "expected {why:?} in {}", log.dump());
+    }
+    // The other forms hosts write for the same folder all instantiate.
+    let folder = fmu.resources().display().to_string();
+    let encoded = folder.replace('/', "%2F").replacen("%2F", "/", 1);
+    for form in [format!("file:{folder}"), format!("file://localhost{folder}"), format!("FILE://{folder}"), format!("file://{encoded}")] {
+        let (c, log, _cb) = fmu.instantiate_with("a", &guid, &form);
+        assert!(!c.is_null(), "refused {form}: {}", log.dump());
+        unsafe { (fmu.api.fmi2FreeInstance)(c) };
     }
     // A resources folder without a spec file, and one with a corrupt spec.
     let empty = tempfile::tempdir().unwrap();

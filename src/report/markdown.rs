@@ -144,8 +144,9 @@ pub fn report_markdown(run: &PaperRun) -> String {
         match settings.intent_horizon {
             None => "The task-space loops' compensators are fed the measured joint speeds (the paper's).".to_owned(),
             Some(h) => format!(
-                "The task-space loops' compensators are fed the speed the controller commands {h} s ahead, q̇ + {h} u (`--intent-horizon`), \
-                 not the measured one, so a joint at rest is compensated the way the law moves it."
+                "The task-space loops' compensators are fed the speed the controller commands {h} s ahead, q̇ + {h} u (`--intent-horizon`; \
+                 the lead {h} u dropped where it points against a moving joint), not the measured one, so a joint at rest is \
+                 compensated the way the law moves it."
             ),
         }
     );

@@ -122,28 +122,10 @@ unsafe fn with(c: Component, name: &str, body: impl FnOnce(&mut Wrapper) -> Stat
     }
 }
 
-/// Turns a resource location URI (`file:///…` or `file:/…`, percent-encoded) into a folder
-/// path (which may not exist).
+/// Turns a resource location URI into a folder path of this platform (which may not exist):
+/// the forms hosts pass on Unix and Windows, see [`crate::uri`].
 pub fn resource_folder(uri: &str) -> Result<PathBuf, String> {
-    let path = if let Some(rest) = uri.strip_prefix("file://") {
-        let rest = rest.strip_prefix("localhost").unwrap_or(rest);
-        if !rest.starts_with('/') {
-            return Err(format!("resource location '{uri}' names a remote host"));
-        }
-        rest
-    } else if let Some(rest) = uri.strip_prefix("file:") {
-        if !rest.starts_with('/') {
-            return Err(format!("resource location '{uri}' is not an absolute file URI"));
-        }
-        rest
-    } else {
-        return Err(format!("resource location '{uri}' is not a file:// URI"));
-    };
-    let decoded = percent_encoding::percent_decode_str(path)
-        .decode_utf8()
-        .map_err(|_| format!("resource location '{uri}' is not valid UTF-8 after percent-decoding"))?;
-    // The folder need not exist: an FMU without resources has none in its archive.
-    Ok(PathBuf::from(decoded.as_ref()))
+    crate::uri::resource_path(uri, crate::uri::PathStyle::native()).map(PathBuf::from)
 }
 
 /// `fmi2Instantiate`: NULL, after logging why, for an empty name, a wrong GUID, missing

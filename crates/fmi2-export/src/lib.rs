@@ -127,6 +127,7 @@ pub mod model;
 #[cfg(feature = "package")]
 pub mod package;
 pub mod table;
+pub mod uri;
 
 pub use description::{
     Causality, DefaultExperiment, DescriptionError, EnumerationItem, EnumerationType, Kind, ModelDescription, Unit, Variability, Variable,
