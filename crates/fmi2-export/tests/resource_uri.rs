@@ -7,7 +7,9 @@ use fmi2_export::uri::{resource_path, PathStyle};
 /// (URI, Unix folder or `Err`, Windows folder or `Err`); `Err` stands for any error. On Unix a
 /// drive-letter URI names the folder its path spells (`/C:/x` is a legal Unix path): only the
 /// Windows build reads the letter as a drive.
-const TABLE: &[(&str, Result<&str, ()>, Result<&str, ()>)] = &[
+type Folder = Result<&'static str, ()>;
+
+const TABLE: &[(&str, Folder, Folder)] = &[
     // Unix hosts (fmpy, OpenModelica, libcosim on Linux).
     ("file:///home/u/run/resources", Ok("/home/u/run/resources"), Ok(r"\home\u\run\resources")),
     ("file:/home/u/run/resources", Ok("/home/u/run/resources"), Ok(r"\home\u\run\resources")),
