@@ -7,13 +7,15 @@
 //! on joints above 4 N·m) and the pairs span 0.2 to 4.9
 //! rad/s both ways; the gravity net is within 1 % RMS and 5 % at worst of each joint's largest
 //! torque over the whole turn; in the joint loop NN compensation settles at most 1.5 × as far
-//! from the targets as the ideal compensator (issue 24's targets).
+//! from the targets as the ideal compensator (issue 24's targets); on the emulated real arm with
+//! its sensor noise switched off, the true friction law tracks better than no compensation.
 //!
 //! Printed, not asserted, because on some of these arms they miss issue 24's targets (open; see
 //! its notes and `scripts/bench-family`): sim NN/perfect (target ≤ 1.10; stick–slip, see the
 //! last column, the share of the perfect run's samples with a joint at rest), none/perfect
-//! (≥ 5), real NN/none (≤ 0.3; the emulated sensors' noise floor) and the friction nets' error
-//! (2 % on the example arms).
+//! (≥ 5), real NN/none (≤ 0.3; the emulated sensors' noise floor: printed beside it are the true
+//! law fed the measured speed over none, and NN/none and true law/none with the noise off) and the
+//! friction nets' error (2 % on the example arms).
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
 use std::sync::Mutex;
@@ -52,7 +54,7 @@ fn the_quick_paper_run_holds_on_the_random_family_of_arms() {
     let mut rows = rows.into_inner().unwrap();
     rows.sort_by_key(|r: &String| r.clone());
     eprintln!(
-        "seed joints | sim NN/perfect none/perfect real NN/none | worst friction net sim, real | gravity RMS, largest (quick) | joint NN/ideal | perfect run: joint at rest"
+        "seed joints | sim NN/perfect none/perfect real NN/none | real, true positions: perfect/none, noise off NN/none, perfect/none | worst friction net sim, real | gravity RMS, largest (quick) | joint NN/ideal | perfect run: joint at rest"
     );
     for r in &rows {
         eprintln!("{r}");
@@ -88,8 +90,20 @@ fn run_one(seed: u64, joints: usize) -> String {
         );
     }
     assert!(joint_ratio <= 1.5, "joint loop: NN settles {joint_ratio:.2} × as far from the targets as the ideal compensator");
+    // With the emulated sensors' noise switched off, the real arm's own friction law beats no
+    // compensation (how much noise costs on each arm is printed, not asserted: on some arms the
+    // noisy run happens to track better, see issue 24's notes).
+    let sensors = &r.table_1.real_sensors;
+    let [quiet_perfect, quiet_nn, quiet_none] = sensors.quiet_mse_m2.expect("the emulated real arm has sensor noise");
+    assert!(
+        quiet_perfect < quiet_none,
+        "noise off, the true friction law tracks no better ({quiet_perfect:.3e} m²) than no compensation ({quiet_none:.3e} m²)"
+    );
     format!(
-        "{seed:4} {joints:6} | {nn_perfect:14.3} {none_perfect:12.1} {real_nn_none:12.3} | {:.2} %, real {:.2} % | {:.2} %, {:.2} % | {joint_ratio:.2} | {:.1} %",
+        "{seed:4} {joints:6} | {nn_perfect:14.3} {none_perfect:12.1} {real_nn_none:12.3} | {:.3} {:.3} {:.3} | {:.2} %, real {:.2} % | {:.2} %, {:.2} % | {joint_ratio:.2} | {:.1} %",
+        sensors.perfect_over_none,
+        quiet_nn / quiet_none,
+        quiet_perfect / quiet_none,
         100.0 * worst_net,
         100.0 * worst_real_net,
         100.0 * rms.iter().cloned().fold(0.0, f64::max),

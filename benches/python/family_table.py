@@ -7,7 +7,12 @@ sim NN/perfect <= 1.10, none/perfect >= 5 (else: "little friction", reported, no
 real NN/none <= 0.3, gravity whole-turn RMS < 1 % and largest < 5 % of each joint's largest
 torque, joint-loop NN settled error <= 1.5 x ideal on every joint. Beside them: the share of the
 perfect-compensation tracking run's samples with a joint at rest (stick-slip), and real NN/none
-against the true positions (the measured one carries the emulated encoders' noise).
+against the true positions (the measured one carries the emulated encoders' noise), what the
+real arm's true friction law gives fed the same measured speed (perfect/none), and real NN/none
+with the sensors' noise off: a miss that the noise-free run meets while the true law on the
+measured speed does no better than the net is the sensors' limit, and is marked so. For sim
+NN/perfect: the simulated arm's true law scaled by 0.99 and by 1.01 over perfect; a miss within
+the worse of those two (a net 1 % off the law would do as badly) is marked so.
 """
 
 import argparse
@@ -66,6 +71,14 @@ def read_row(out, seed, wall_s, rc):
     # Against the true positions: the measured MSE carries the emulated encoders' noise, the
     # same floor under both cases.
     row["real_nn_over_none_true"] = true["real_nn"] / true["real_none"]
+    # What the sensors cost (runs written before results.json carried it: None).
+    sensors = r["table_1"].get("real_sensors", {})
+    row["real_perfect_over_none"] = sensors.get("perfect_over_none")
+    row["real_nn_over_none_quiet"] = sensors.get("quiet_nn_over_none")
+    law = r["table_1"].get("sim_law_sensitivity", {})
+    row["sim_law_low_over_perfect"] = law.get("low_over_perfect")
+    row["sim_law_high_over_perfect"] = law.get("high_over_perfect")
+    row["sim_law_error"] = law.get("law_error")
     row["worst_friction_net_share"] = max(f["net_error_share"] for f in r["friction"])
     # The simulated arm's nets at low speed (5-200 mrad/s), where they cross the Coulomb step:
     # what NN/perfect is most sensitive to. Runs written before results.json carried it: None.
@@ -103,11 +116,18 @@ def verdicts(row):
         return ["run failed"], False
     missed = []
     if row["sim_nn_over_perfect"] > TARGETS["sim_nn_over_perfect"]:
-        missed.append("sim NN/perfect")
+        low, high, err = row.get("sim_law_low_over_perfect"), row.get("sim_law_high_over_perfect"), row.get("sim_law_error")
+        if low is not None and high is not None and row["sim_nn_over_perfect"] <= max(low, high):
+            missed.append(f"sim NN/perfect (within the true law +-{100 * err:.0f} %: {low:.2f}, {high:.2f} x perfect)")
+        else:
+            missed.append("sim NN/perfect")
     little_friction = row["sim_none_over_perfect"] < TARGETS["sim_none_over_perfect"]
     if row["real_nn_over_none"] > TARGETS["real_nn_over_none"]:
+        quiet, perfect = row.get("real_nn_over_none_quiet"), row.get("real_perfect_over_none")
         if row["real_nn_over_none_true"] <= TARGETS["real_nn_over_none"]:
             missed.append("real NN/none (met on the true positions: the measured error's noise floor)")
+        elif quiet is not None and quiet <= TARGETS["real_nn_over_none"] and perfect is not None and perfect >= row["real_nn_over_none_true"]:
+            missed.append(f"real NN/none (the speed noise: met with it off; the true law on the measured speed gives {perfect:.2f} x none)")
         else:
             missed.append("real NN/none")
     if row["gravity_rms_share"] >= TARGETS["gravity_rms_share"]:
@@ -120,24 +140,27 @@ def verdicts(row):
 
 
 def table(rows):
-    head = ("| seed | joints | sim NN/perfect | none/perfect | real NN/none | real NN/none, true positions | worst friction net | sim nets at low speed | gravity RMS | gravity largest | joint NN/ideal | perfect run: joint at rest | time [s] | missed |\n"
-            "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n")
+    head = ("| seed | joints | sim NN/perfect | sim law x0.99 / x1.01 over perfect | none/perfect | real NN/none | real NN/none, true positions | real perfect/none, measured speed | real NN/none, noise off | worst friction net | sim nets at low speed | gravity RMS | gravity largest | joint NN/ideal | perfect run: joint at rest | time [s] | missed |\n"
+            "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n")
     lines = []
     for row in rows:
         missed, little = verdicts(row)
         if "error" in row:
-            lines.append(f"| {row['seed']} | {row['joints']} | | | | | | | | | | | {row['wall_s']:.0f} | run failed: {row['error']} |")
+            lines.append(f"| {row['seed']} | {row['joints']} | | | | | | | | | | | | | | {row['wall_s']:.0f} | run failed: {row['error']} |")
             continue
         share = row.get("perfect_resting_share")
         resting = "" if share is None else f"{100 * share:.1f} %"
         low = row.get("worst_low_speed_share_sim")
         low_speed = "" if low is None else f"{100 * low:.2f} %"
+        fmt = lambda v: "" if v is None else f"{v:.3f}"
+        lo, hi = row.get("sim_law_low_over_perfect"), row.get("sim_law_high_over_perfect")
+        law = "" if lo is None or hi is None else f"{lo:.2f} / {hi:.2f}"
         note = ", ".join(missed) or "none"
         if little:
             note += " (none/perfect < 5: little friction)"
         lines.append(
-            f"| {row['seed']} | {row['joints']} | {row['sim_nn_over_perfect']:.3f} | {row['sim_none_over_perfect']:.1f} | "
-            f"{row['real_nn_over_none']:.3f} | {row['real_nn_over_none_true']:.3f} | {100 * row['worst_friction_net_share']:.2f} % | {low_speed} | {100 * row['gravity_rms_share']:.2f} % | "
+            f"| {row['seed']} | {row['joints']} | {row['sim_nn_over_perfect']:.3f} | {law} | {row['sim_none_over_perfect']:.1f} | "
+            f"{row['real_nn_over_none']:.3f} | {row['real_nn_over_none_true']:.3f} | {fmt(row.get('real_perfect_over_none'))} | {fmt(row.get('real_nn_over_none_quiet'))} | {100 * row['worst_friction_net_share']:.2f} % | {low_speed} | {100 * row['gravity_rms_share']:.2f} % | "
             f"{100 * row['gravity_max_share']:.2f} % | {row['joint_nn_over_ideal']:.2f} | {resting} | {row['run_s']:.0f} | {note} |")
     met = sum(1 for row in rows if not verdicts(row)[0])
     return head + "\n".join(lines) + f"\n\n{met} of {len(rows)} arms meet every target.\n"

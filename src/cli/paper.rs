@@ -183,6 +183,13 @@ pub fn run(args: PaperArgs) -> Result<()> {
         "Table 1 MSE [m²]: sim perfect {:.3e}, NN {:.3e}, none {:.3e}; real NN {:.3e}, none {:.3e}\nratios: sim NN/perfect {:.3}, none/perfect {:.1}; real NN/none {:.3}",
         m.sim_perfect, m.sim_nn, m.sim_none, m.real_nn, m.real_none, q.sim_nn_over_perfect, q.sim_none_over_perfect, q.real_nn_over_none
     );
+    let sensors = &t.real_sensors;
+    let quiet = sensors.quiet_nn_over_none.map_or(String::new(), |r| format!("; sensor noise off: real NN/none {r:.3}"));
+    eprintln!(
+        "real arm, true positions: NN/none {:.3}, true friction law/none {:.3}{quiet}",
+        t.true_mse_m2.real_nn / t.true_mse_m2.real_none,
+        sensors.perfect_over_none
+    );
     eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
     Ok(())
 }

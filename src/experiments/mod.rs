@@ -146,6 +146,9 @@ pub struct Fmus {
     pub joint_controller: PathBuf,
     /// Ideal friction compensator of the nominal arm (its `enable_gravity` starts false).
     pub ideal_friction: PathBuf,
+    /// Ideal friction compensator of the real arm, its true friction law (its `enable_gravity`
+    /// starts false): what perfect friction compensation is on the real arm.
+    pub ideal_friction_real: PathBuf,
     /// Ideal gravity compensator of the nominal arm with its base turned 90° (its
     /// `enable_friction` starts false).
     pub ideal_gravity: PathBuf,
@@ -186,6 +189,10 @@ pub fn build_fmus(dir: &Path, arms: &Arms, settings: &Settings) -> Result<Fmus, 
         ideal_friction: export(
             "IdealFrictionCompensator",
             ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: nominal.arm.clone(), enable_friction: true, enable_gravity: false }),
+        )?,
+        ideal_friction_real: export(
+            "IdealFrictionCompensatorReal",
+            ModelSpec::IdealCompensator(IdealCompensatorSpec { arm: arms.real.arm.clone(), enable_friction: true, enable_gravity: false }),
         )?,
         ideal_gravity: export(
             "IdealGravityCompensator",

@@ -45,6 +45,62 @@ pub const ADAPTATION_LOOPS: [&str; 10] = [
     "steady_adaptive",
 ];
 
+/// Loops beside Table 1 that say what bounds its ratios, each a Table 1 system with one change:
+/// the simulated arm's true friction law scaled by 1 ∓ [`LAW_ERROR`] as compensator (see
+/// [`LawSensitivity`]); the real arm's true law as compensator, then the real arm's true law,
+/// NN and no compensation with the sensors' noise off (see [`SensorLimit`]; the quiet ones only
+/// when the real arm has noise).
+pub const DIAGNOSTIC_LOOPS: [&str; 6] = [
+    "tracking_sim_perfect_low",
+    "tracking_sim_perfect_high",
+    "tracking_real_perfect",
+    "tracking_real_perfect_quiet",
+    "tracking_real_nn_quiet",
+    "tracking_real_none_quiet",
+];
+
+/// The relative error of the true friction law in the [`LawSensitivity`] loops: 1 %.
+pub const LAW_ERROR: f64 = 0.01;
+
+/// How much sim NN/perfect can tell: the simulated arm tracked with its own true friction law
+/// off by ∓[`LAW_ERROR`] (every joint's Coulomb and viscous parts scaled by 1 ∓ it), MSE over
+/// the perfect run's (Table 1's measured MSEs).
+///
+/// Where even the true law 1 % off tracks several times worse than the exact one (a perfect
+/// run with µm errors), NN/perfect ≤ 1.10 asks more of the nets than 1 % accuracy; where the
+/// two scaled runs scatter around 1 (stick–slip), a ratio near 1 is within that scatter.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct LawSensitivity {
+    /// The relative error applied [1].
+    pub law_error: f64,
+    /// The law scaled by 1 − `law_error`: MSE over perfect's.
+    pub low_over_perfect: f64,
+    /// The law scaled by 1 + `law_error`: MSE over perfect's.
+    pub high_over_perfect: f64,
+}
+
+/// What the real arm's sensors cost its friction compensation, from the [`DIAGNOSTIC_LOOPS`]; all
+/// MSEs from the true positions [m²], ratios over the uncompensated run of the same sensors.
+///
+/// A compensator reads the measured speed. Where that carries noise of the order of the speeds
+/// at which a joint reverses, a friction law with a step at zero speed switches on the noise,
+/// so even the arm's true law can track worse than no compensation: then real NN/none is
+/// bounded by the sensors, not by the nets. Quiet runs keep the encoders' quantisation and
+/// switch off only the noise (`q_noise_std`, `qd_noise_std` set to 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct SensorLimit {
+    /// The real arm's true friction law fed the same measured speed as the NN [m²].
+    pub perfect_mse_m2: f64,
+    /// `perfect_mse_m2` over the uncompensated run's (Table 1's real none, true positions).
+    pub perfect_over_none: f64,
+    /// With the noise off, if the real arm has any: true law, NN, none [m²].
+    pub quiet_mse_m2: Option<[f64; 3]>,
+    /// With the noise off: NN / none.
+    pub quiet_nn_over_none: Option<f64>,
+    /// With the noise off: true law / none.
+    pub quiet_perfect_over_none: Option<f64>,
+}
+
 /// One figure per case of Table 1 [unit as named by the field holding it].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Cases {
@@ -90,6 +146,10 @@ pub struct Table1 {
     pub resting_share: Cases,
     /// Ratios of the measured MSEs.
     pub ratios: Ratios,
+    /// How sim NN/perfect reacts to a true law 1 % off.
+    pub sim_law_sensitivity: LawSensitivity,
+    /// What the real arm's sensors cost its compensation.
+    pub real_sensors: SensorLimit,
     /// The paper's values [m²].
     pub paper_m2: Cases,
     /// Geometric mean over the five cases of paper / ours (measured MSE).
@@ -565,6 +625,8 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         samples: errors[0].samples,
         resting_share: pick(&|e| e.resting_share),
         ratios: Ratios::of(&mse),
+        sim_law_sensitivity: LawSensitivity::default(),
+        real_sensors: SensorLimit::default(),
         paper_m2: paper,
         paper_over_ours: log_ratio.exp(),
     };
@@ -575,8 +637,26 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         settled_rad: [0, 1, 2].map(|k| joint_settled_errors(&loops[5 + k], n)),
     };
     lap("closed loops", log);
+    let noisy = arms.real.hardware.q_noise_std_rad > 0.0 || arms.real.hardware.qd_noise_std_rad_s > 0.0;
+    let (sim_law_sensitivity, real_sensors) = diagnostics(
+        &DiagnosticBases {
+            sim_perfect: tracking(&arm, Some(rel(&fmus.ideal_friction))),
+            real_nn: tracking(&arm_real, Some(rel(&nn_real))),
+            real_perfect: tracking(&arm_real, Some(rel(&fmus.ideal_friction_real))),
+            real_none: tracking(&arm_real, None),
+        },
+        n,
+        noisy,
+        &table_1,
+        out,
+        &systems_dir,
+        settings.threads,
+    )?;
+    let table_1 = Table1 { sim_law_sensitivity, real_sensors, ..table_1 };
+    lap("diagnostic loops", log);
 
-    let (adaptation, adaptation_loops) = adaptation_runs(out, &fmu_dir, &systems_dir, arms, settings, &friction_files[1], &gravity_path)?;
+    let (adaptation, adaptation_loops) =
+        adaptation_runs(out, &fmu_dir, &systems_dir, arms, settings, &fmus.ideal_friction_real, &friction_files[1], &gravity_path)?;
     lap("online adaptation", log);
 
     let (near, far) = arms.placement.distance_range();
@@ -607,16 +687,88 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     Ok(PaperRun { results, friction_pairs, friction_nets, gravity_pairs, loops, adaptation_loops, arms: arms.clone() })
 }
 
+/// The Table 1 systems the [`DIAGNOSTIC_LOOPS`] are built from.
+struct DiagnosticBases {
+    sim_perfect: SystemSpec,
+    real_nn: SystemSpec,
+    real_perfect: SystemSpec,
+    real_none: SystemSpec,
+}
+
+/// Runs the [`DIAGNOSTIC_LOOPS`] of an arm of `n` joints (their files written into
+/// `systems_dir` beside the others; the quiet ones only if the real arm is `noisy`) and returns
+/// their figures against `table_1`'s.
+fn diagnostics(
+    bases: &DiagnosticBases,
+    n: usize,
+    noisy: bool,
+    table_1: &Table1,
+    out: &Path,
+    systems_dir: &Path,
+    threads: usize,
+) -> Result<(LawSensitivity, SensorLimit), String> {
+    let set = |mut spec: SystemSpec, unit: &str, values: &[(String, f64)]| {
+        if let Some(entry) = spec.fmu.iter_mut().find(|f| f.name == unit) {
+            for (name, value) in values {
+                entry.parameters.insert(name.clone(), fmi2_cosim::Value::Real(*value));
+            }
+        }
+        spec
+    };
+    let law_scaled = |scale: f64| {
+        let values: Vec<(String, f64)> =
+            (1..=n).flat_map(|i| [(format!("coulomb_scale_{i}"), scale), (format!("viscous_scale_{i}"), scale)]).collect();
+        set(bases.sim_perfect.clone(), "comp", &values)
+    };
+    let quiet = |spec: &SystemSpec| set(spec.clone(), "arm", &[("q_noise_std".into(), 0.0), ("qd_noise_std".into(), 0.0)]);
+    let mut specs = vec![law_scaled(1.0 - LAW_ERROR), law_scaled(1.0 + LAW_ERROR), bases.real_perfect.clone()];
+    if noisy {
+        specs.extend([quiet(&bases.real_perfect), quiet(&bases.real_nn), quiet(&bases.real_none)]);
+    }
+    for (name, spec) in DIAGNOSTIC_LOOPS.iter().zip(&specs) {
+        let toml = systems_dir.join(format!("{name}.toml"));
+        let text = format!(
+            "# The {name} loop of `neurarm paper` (what bounds Table 1's ratios); rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
+            spec.to_toml()?
+        );
+        write_text_atomic(&toml, &text).map_err(writing(&toml))?;
+        fmi2_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
+    }
+    let b = bar(specs.len() as u64, "diagnostic loops");
+    let tasks: Vec<(&str, SystemSpec)> = DIAGNOSTIC_LOOPS.iter().copied().zip(specs).collect();
+    let runs = parallel(tasks, threads, |(name, spec)| run_loop(&spec, systems_dir).map_err(|e| format!("loop {name}: {e}")), || b.inc(1))?;
+    b.finish_and_clear();
+    let errors: Vec<TrackingErrors> = runs.iter().map(tracking_errors).collect();
+    let sensitivity = LawSensitivity {
+        law_error: LAW_ERROR,
+        low_over_perfect: errors[0].measured_mse_m2 / table_1.mse_m2.sim_perfect,
+        high_over_perfect: errors[1].measured_mse_m2 / table_1.mse_m2.sim_perfect,
+    };
+    let true_mse: Vec<f64> = errors.iter().map(|e| e.true_mse_m2).collect();
+    let quiet_mse = noisy.then(|| [true_mse[3], true_mse[4], true_mse[5]]);
+    let sensors = SensorLimit {
+        perfect_mse_m2: true_mse[2],
+        perfect_over_none: true_mse[2] / table_1.true_mse_m2.real_none,
+        quiet_mse_m2: quiet_mse,
+        quiet_nn_over_none: quiet_mse.map(|m| m[1] / m[2]),
+        quiet_perfect_over_none: quiet_mse.map(|m| m[0] / m[2]),
+    };
+    Ok((sensitivity, sensors))
+}
+
 /// The online-adaptation runs on the real arm ([`adaptation`]): exports their compensators
-/// into `fmu_dir` (the ideal ones of the real arm, the adaptive ones from the real arm's
-/// friction nets `real_friction` and the gravity net), writes their system files into
+/// into `fmu_dir` (the real arm's ideal gravity compensator, the adaptive ones from the real
+/// arm's friction nets `real_friction` and the gravity net; `perfect_friction` is the real
+/// arm's ideal friction compensator, exported already), writes their system files into
 /// `systems_dir` and runs them.
+#[allow(clippy::too_many_arguments)]
 fn adaptation_runs(
     out: &Path,
     fmu_dir: &Path,
     systems_dir: &Path,
     arms: &Arms,
     settings: &Settings,
+    perfect_friction: &Path,
     real_friction: &[(String, PathBuf)],
     gravity_path: &Path,
 ) -> Result<(adaptation::AdaptationResults, Vec<LoopRun>), String> {
@@ -631,7 +783,6 @@ fn adaptation_runs(
     let ideal = |id: &str, arm: ArmParams, friction: bool| {
         export(id, ModelSpec::IdealCompensator(IdealCompensatorSpec { arm, enable_friction: friction, enable_gravity: !friction }), &[])
     };
-    let perfect_friction = ideal("IdealFrictionCompensatorReal", real.clone(), true)?;
     let perfect_gravity = ideal("IdealGravityCompensatorReal", real.clone().with_base_angle(std::f64::consts::FRAC_PI_2), false)?;
     let adaptive = |id: &str, friction: &[(String, PathBuf)], gravity: Option<&Path>, law: neurarm_models::AdaptationLaw| {
         let mut sources = friction.to_vec();
@@ -653,7 +804,7 @@ fn adaptation_runs(
     let rel = |p: &Path| Path::new("..").join(p.strip_prefix(out).unwrap_or(p));
     let fmu = |id: &str| rel(&fmu_dir.join(format!("{id}.fmu")));
     let (arm_real, task, joint) = (fmu("PlanarArmReal"), fmu("TaskSpaceController"), fmu("JointController"));
-    let (pf, pg, af, ag) = (rel(&perfect_friction), rel(&perfect_gravity), rel(&adaptive_friction), rel(&adaptive_gravity));
+    let (pf, pg, af, ag) = (rel(perfect_friction), rel(&perfect_gravity), rel(&adaptive_friction), rel(&adaptive_gravity));
     let (sf, sg) = (fmu("NnFrictionCompensatorReal"), fmu("NnGravityCompensator"));
     let friction_comps = adaptation::Compensators { perfect: &pf, static_nn: &sf, adaptive: &af };
     let gravity_comps = adaptation::Compensators { perfect: &pg, static_nn: &sg, adaptive: &ag };
