@@ -23,17 +23,18 @@ ensure_debian_packages() {
   DEBIAN_FRONTEND=noninteractive as_root apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
-# ensure_venv REQUIREMENTS: a Python venv in .venv with the pinned packages; reinstalls only
-# when the requirements file changes.
+# ensure_venv REQUIREMENTS [VENV]: a Python venv (default .venv) with the pinned packages;
+# reinstalls only when the requirements file changes.
 ensure_venv() {
-  local req="$1" stamp="$VENV/.requirements"
-  if [ ! -x "$VENV/bin/python" ]; then
-    log "creating Python venv in .venv"
-    python3 -m venv "$VENV" 2>/dev/null || { ensure_debian_packages python3-venv; python3 -m venv "$VENV"; }
+  local req="$1" venv="${2:-$VENV}"
+  local stamp="$venv/.requirements"
+  if [ ! -x "$venv/bin/python" ]; then
+    log "creating Python venv in ${venv#$ROOT/}"
+    python3 -m venv "$venv" 2>/dev/null || { ensure_debian_packages python3-venv; python3 -m venv "$venv"; }
   fi
   if ! cmp -s "$req" "$stamp"; then
     log "installing Python packages from ${req#$ROOT/}"
-    "$VENV/bin/python" -m pip install -q --disable-pip-version-check -r "$req"
+    "$venv/bin/python" -m pip install -q --disable-pip-version-check -r "$req"
     cp "$req" "$stamp"
   fi
 }

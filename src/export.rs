@@ -1,12 +1,19 @@
 //! Exporting neurarm's models as `.fmu` files: the spec of a model, its resource files, and
-//! the one FMU binary (`fmu/`), which this module finds among cargo's output.
+//! the one FMU binary (`fmu/`) per platform, which this module finds among cargo's output:
+//! the host's beside the running program, cross-built ones (`scripts/build-platforms`) in
+//! `fmu-binaries/<platform>/` beside it.
 
 use std::path::{Path, PathBuf};
 
+use fmi2_export::package::{select_binaries, PLATFORM};
 use neurarm_models::{FmuSpec, SPEC_FILE};
 
 /// File name of the FMU binary that `cargo build --release` makes.
 pub const BINARY_NAME: &str = "libneurarm_fmu.so";
+
+/// Folder of the cross-built FMU binaries, beside the running program (or one folder up):
+/// `fmu-binaries/<platform>/` holds each platform's library under cargo's name for it.
+pub const CROSS_DIR: &str = "fmu-binaries";
 
 /// Finds the FMU binary: `$NEURARM_FMU_BINARY` if set, else beside the running program (or
 /// one folder up, for test binaries in `target/*/deps` and examples in `target/*/examples`).
@@ -29,14 +36,50 @@ pub fn find_binary() -> Result<PathBuf, String> {
     ))
 }
 
-/// Writes the FMU for `spec` to `path`, with the files it names taken from `sources`. The
+/// The folder of cross-built binaries: `$NEURARM_FMU_PLATFORMS` if set, else [`CROSS_DIR`]
+/// beside the running program or one folder up; `None` if there is none.
+pub fn cross_dir() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("NEURARM_FMU_PLATFORMS") {
+        return Some(PathBuf::from(p));
+    }
+    let exe = std::env::current_exe().ok()?;
+    let dir = exe.parent()?;
+    [dir.join(CROSS_DIR), dir.join("..").join(CROSS_DIR)].into_iter().find(|p| p.is_dir())
+}
+
+/// The platform binaries an FMU carries, `(platform folder, library)`: the host's (see
+/// [`find_binary`]) and, for `platforms` `None`, every cross-built one found in
+/// [`cross_dir`]; for `Some(list)`, exactly the platforms listed, with an error naming each
+/// one not built and how to build it.
+pub fn fmu_binaries(platforms: Option<&[String]>) -> Result<Vec<(String, PathBuf)>, String> {
+    let host = if platforms.is_none_or(|w| w.iter().any(|p| p == PLATFORM.0)) { Some(find_binary()?) } else { None };
+    select_binaries(host, cross_dir().as_deref(), "neurarm_fmu", platforms).map_err(|e| {
+        if e.starts_with("unknown platform") {
+            e
+        } else {
+            format!(
+                "{e}; build them with scripts/build-platforms, or point NEURARM_FMU_PLATFORMS at a folder of <platform>/<library> builds"
+            )
+        }
+    })
+}
+
+/// Writes the FMU for `spec` to `path` with the binaries of every platform found: see
+/// [`export_fmu_for`].
+pub fn export_fmu(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path) -> Result<(), String> {
+    export_fmu_for(spec, sources, path, None)
+}
+
+/// Writes the FMU for `spec` to `path`, with the files it names taken from `sources` and the
+/// binaries of `platforms` (see [`fmu_binaries`]: `None` packs every one found). The
 /// files are checked by building the model from them exactly as the FMU will at
 /// instantiation. The FMU is packed in a temporary folder, then written to `path` as
 /// [`crate::output`] says: a file is replaced whole (nothing is left at `path` on failure), a
 /// device or FIFO gets the archive's bytes. `-` is refused: an FMU is a binary archive, not
 /// something for a terminal (`/dev/stdout` streams it to a pipe).
-pub fn export_fmu(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path) -> Result<(), String> {
+pub fn export_fmu_for(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path, platforms: Option<&[String]>) -> Result<(), String> {
     refuse_stdout(path)?;
+    let binaries = fmu_binaries(platforms)?;
     let staging = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
     let mut resources = vec![(SPEC_FILE.to_owned(), spec.to_toml().into_bytes())];
     for name in spec.resource_files() {
@@ -50,10 +93,10 @@ pub fn export_fmu(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path) ->
         let e = e.to_string();
         sources.iter().fold(e, |e, (name, p)| e.replace(&staging.path().join(name).display().to_string(), &p.display().to_string()))
     })?;
-    let binary = find_binary()?;
+    let binaries: Vec<(&str, &Path)> = binaries.iter().map(|(p, b)| (p.as_str(), b.as_path())).collect();
     let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
     let packed = staging.path().join(format!("{}.fmu", spec.identifier));
-    fmi2_export::package::write_fmu(&packed, model.description(), &binary, &files, spec.equations_html())
+    fmi2_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html())
         .map_err(|e| format!("packing {}: {e}", path.display()))?;
     let bytes = std::fs::read(&packed).map_err(|e| format!("reading the packed {}: {e}", path.display()))?;
     crate::output::write_bytes(path, &bytes).map_err(|e| format!("writing {}: {e}", path.display()))

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::experiments::{train_friction_net, train_gravity_net, Settings};
-use crate::export::export_fmu;
+use crate::export::export_fmu_for;
 use crate::identify::{
     identify_friction_log, identify_gravity_log, FrictionCurve, FrictionIdentification, FrictionOptions, FrictionPair, GravityCorrection,
     GravityIdentification, GravityOptions, LogColumns, RobotLog, Verdict,
@@ -177,6 +177,8 @@ pub struct CompensatorJob {
     pub identifier: String,
     /// Seed of the trainings.
     pub seed: u64,
+    /// Platforms the FMU carries: `None` for every one built (see [`crate::export::fmu_binaries`]).
+    pub platforms: Option<Vec<String>>,
 }
 
 /// What [`compensator_from_logs`] made.
@@ -270,7 +272,7 @@ pub fn compensator_from_logs(
             enable_gravity: gravity_pairs.is_some(),
         }),
     };
-    export_fmu(&spec, &sources, &job.output)?;
+    export_fmu_for(&spec, &sources, &job.output, job.platforms.as_deref())?;
     files.push(job.output.clone());
     Ok(CompensatorSummary { joints: n, friction_pairs, gravity_pairs, files })
 }

@@ -61,8 +61,7 @@ enum Command {
     /// the NnCompensator; every intermediate file is kept in a folder.
     Compensator(compensator::CompensatorArgs),
     /// Build an FMI 2.0 Co-Simulation FMU.
-    #[command(subcommand)]
-    Export(export::Export),
+    Export(export::ExportArgs),
     /// Train a two-layer network (tansig hidden layer, linear output) with Levenberg–Marquardt.
     ///
     /// The data CSV has a header; each row is one sample. Defaults follow MATLAB's trainlm

@@ -159,7 +159,6 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> io::Result<()> {
 
 /// Writes `target` through a temporary file beside it, renamed over it once complete.
 fn replace_file(target: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> io::Result<()> {
-    use std::os::unix::fs::PermissionsExt;
     let dir = folder_of(target);
     if !dir.is_dir() {
         let problem = if dir.exists() { "is not a folder" } else { "does not exist" };
@@ -168,8 +167,7 @@ fn replace_file(target: &Path, write: impl FnOnce(&mut dyn Write) -> io::Result<
     // A replaced file keeps its mode; a new one gets what a plain create would (0644 less the
     // umask), not the temporary file's 0600.
     let kept = std::fs::metadata(target).ok().map(|m| m.permissions());
-    let tmp =
-        tempfile::Builder::new().permissions(std::fs::Permissions::from_mode(0o644)).prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
+    let tmp = crate::table::readable_temp_file().prefix(".neurarm-").suffix(".tmp").tempfile_in(dir)?;
     if let Some(mode) = kept {
         tmp.as_file().set_permissions(mode)?;
     }

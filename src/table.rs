@@ -256,11 +256,15 @@ fn csv_cause(e: &csv::Error) -> String {
     }
 }
 
-/// Permissions of the files we write: read-write for the owner, readable by others (as a
-/// plain `create` under the usual umask would give), not the temporary file's 0600.
-pub(crate) fn readable_file() -> std::fs::Permissions {
-    use std::os::unix::fs::PermissionsExt;
-    std::fs::Permissions::from_mode(0o644)
+/// A builder of temporary files that become the files we write: on Unix read-write for the
+/// owner and readable by others (as a plain `create` under the usual umask would give), not a
+/// temporary file's 0600; elsewhere the platform's default.
+pub(crate) fn readable_temp_file<'a>() -> tempfile::Builder<'a, 'a> {
+    #[allow(unused_mut)] // mutated on Unix only
+    let mut builder = tempfile::Builder::new();
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    builder
 }
 
 /// Writes `text` to `path` as [`crate::output`] says: a file appears whole or not at all (a

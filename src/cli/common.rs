@@ -176,3 +176,22 @@ impl std::fmt::Display for Interrupted {
 }
 
 impl std::error::Error for Interrupted {}
+
+/// Which platforms' binaries the FMUs carry: shared by the commands that write FMUs.
+#[derive(Args, Clone, Default)]
+pub struct PlatformArgs {
+    /// Platforms every FMU carries, comma-separated FMI folder names (linux64, win64,
+    /// darwin64, aarch64-linux); an error names any not built. Default: the host's and every
+    /// platform built by scripts/build-platforms.
+    #[arg(long, value_delimiter = ',', global = true)]
+    platforms: Option<Vec<String>>,
+}
+
+impl PlatformArgs {
+    /// The platforms asked for (`None`: every one built), checked before any work starts: an
+    /// unknown name or a platform not built is an error here, not after a long run.
+    pub fn checked(self) -> Result<Option<Vec<String>>> {
+        neurarm::export::fmu_binaries(self.platforms.as_deref()).map_err(|e| anyhow::anyhow!("--platforms: {e}"))?;
+        Ok(self.platforms)
+    }
+}

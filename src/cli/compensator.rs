@@ -8,7 +8,7 @@ use clap::Args;
 use neurarm::output::Destination;
 use neurarm_physics::config::ArmConfig;
 
-use super::common::{identifier_for, EpochBar, LogColumnArgs};
+use super::common::{identifier_for, EpochBar, LogColumnArgs, PlatformArgs};
 
 /// The arguments of `neurarm compensator`. Its help text is the doc of `Command::Compensator` in
 /// main.rs, which clap shows instead of this one.
@@ -40,11 +40,14 @@ pub struct CompensatorArgs {
     /// Output .fmu file (`-` is refused: pipe it with /dev/stdout).
     #[arg(long, short = 'o')]
     output: PathBuf,
+    #[command(flatten)]
+    platforms: PlatformArgs,
 }
 
 /// Runs `neurarm compensator`.
 pub fn run(args: CompensatorArgs) -> Result<()> {
-    let CompensatorArgs { friction_log, gravity_log, config, work, seed, name, columns, pass_speed, output } = args;
+    let CompensatorArgs { friction_log, gravity_log, config, work, seed, name, columns, pass_speed, output, platforms } = args;
+    let platforms = platforms.checked()?;
     let model = match config {
         Some(c) => Some(ArmConfig::from_toml_file(&c)?.arm),
         None => None,
@@ -71,6 +74,7 @@ pub fn run(args: CompensatorArgs) -> Result<()> {
         output: output.clone(),
         identifier,
         seed,
+        platforms,
     };
     let bar = EpochBar::new(None);
     let summary =

@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
-use clap::Subcommand;
-use neurarm::export::export_fmu;
+use clap::{Args, Subcommand};
+use neurarm::export::export_fmu_for;
 use neurarm_models::{
     AdaptationLaw, AdaptiveCompensatorSpec, FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec,
     PlanarArmSpec, TaskSpaceControllerSpec,
@@ -13,7 +13,16 @@ use neurarm_models::{
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
 use neurarm_physics::nn::{NetKind, WeightsFile};
 
-use super::common::{identifier_for, load_config, ArmSource};
+use super::common::{identifier_for, load_config, ArmSource, PlatformArgs};
+
+/// `neurarm export`: what to export, and for which platforms.
+#[derive(Args)]
+pub struct ExportArgs {
+    #[command(subcommand)]
+    what: Export,
+    #[command(flatten)]
+    platforms: PlatformArgs,
+}
 
 /// The subcommands of `neurarm export`. Its help text is the doc of `Command::Export` in
 /// main.rs, which clap shows instead of this one.
@@ -145,7 +154,12 @@ pub enum Controller {
 }
 
 /// Runs `neurarm export`.
-pub fn run(command: Export) -> Result<()> {
+pub fn run(args: ExportArgs) -> Result<()> {
+    let platforms = args.platforms.checked()?;
+    let command = args.what;
+    let export = |spec: FmuSpec, sources: &[(String, PathBuf)], output: &std::path::Path, joints: usize| {
+        write_fmu(spec, sources, output, joints, platforms.as_deref())
+    };
     match command {
         Export::Arm { arm, name, output } => {
             let (config, initial) = arm.load()?;
@@ -255,8 +269,14 @@ pub fn run(command: Export) -> Result<()> {
 }
 
 /// Writes the FMU of `spec` and says so.
-fn export(spec: FmuSpec, sources: &[(String, PathBuf)], output: &std::path::Path, joints: usize) -> Result<()> {
-    export_fmu(&spec, sources, output).map_err(anyhow::Error::msg)?;
+fn write_fmu(
+    spec: FmuSpec,
+    sources: &[(String, PathBuf)],
+    output: &std::path::Path,
+    joints: usize,
+    platforms: Option<&[String]>,
+) -> Result<()> {
+    export_fmu_for(&spec, sources, output, platforms).map_err(anyhow::Error::msg)?;
     eprintln!("wrote {} ({}, {joints} joints)", output.display(), spec.identifier);
     Ok(())
 }

@@ -9,7 +9,7 @@ use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::ReferencePlacement;
 use neurarm_physics::nn::InputEncoding;
 
-use super::common::{load_config, parse_angle_encoding};
+use super::common::{load_config, parse_angle_encoding, PlatformArgs};
 
 /// The arguments of `neurarm paper`. Its help text is the doc of `Command::Paper` in
 /// main.rs, which clap shows instead of this one.
@@ -27,6 +27,8 @@ pub struct PaperArgs {
     /// symbolic link, the folder it points to is replaced and the link stays).
     #[arg(long, short = 'o', default_value = "out")]
     output: PathBuf,
+    #[command(flatten)]
+    platforms: PlatformArgs,
     /// A reduced run (3⁴ gravity grid, coarse friction levels, one period of tracking).
     #[arg(long)]
     quick: bool,
@@ -122,8 +124,10 @@ pub fn run(args: PaperArgs) -> Result<()> {
         gravity_plain_average,
         friction_max_speed,
         intent_horizon,
+        platforms,
     } = args;
     let mut settings = if quick { Settings::quick() } else { Settings::paper() };
+    settings.platforms = platforms.checked()?;
     if let Some(s) = seed {
         settings.seed = s;
     }

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use crate::export::export_fmu;
+use crate::export::export_fmu_for;
 use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, MasterError, SimulationSpec, System, SystemSpec, Value};
 use neurarm_models::{
     FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
@@ -161,7 +161,7 @@ pub fn build_fmus(dir: &Path, arms: &Arms, settings: &Settings) -> Result<Fmus, 
     let n = arms.joints();
     let export = |id: &str, model: ModelSpec| -> Result<PathBuf, String> {
         let path = dir.join(format!("{id}.fmu"));
-        export_fmu(&FmuSpec { identifier: id.into(), model }, &[], &path)?;
+        export_fmu_for(&FmuSpec { identifier: id.into(), model }, &[], &path, settings.platforms.as_deref())?;
         Ok(path)
     };
     let ArmState { q: q_start, .. } = tracking_start(&nominal.arm, &arms.placement)?;
@@ -206,13 +206,15 @@ pub fn build_fmus(dir: &Path, arms: &Arms, settings: &Settings) -> Result<Fmus, 
 }
 
 /// Exports an NN compensator FMU of `joints` joints to `path` from the friction nets (file
-/// name in the FMU, source path) and the gravity net, if any, each part switched on.
+/// name in the FMU, source path) and the gravity net, if any, each part switched on, with the
+/// binaries of `platforms` (see [`crate::export::fmu_binaries`]).
 pub fn export_nn_compensator(
     path: &Path,
     identifier: &str,
     joints: usize,
     friction: &[(String, PathBuf)],
     gravity: Option<&Path>,
+    platforms: Option<&[String]>,
 ) -> Result<PathBuf, String> {
     let mut sources = friction.to_vec();
     if let Some(g) = gravity {
@@ -225,7 +227,7 @@ pub fn export_nn_compensator(
         enable_friction: !friction.is_empty(),
         enable_gravity: gravity.is_some(),
     });
-    export_fmu(&FmuSpec { identifier: identifier.into(), model }, &sources, path)?;
+    export_fmu_for(&FmuSpec { identifier: identifier.into(), model }, &sources, path, platforms)?;
     Ok(path.to_path_buf())
 }
 

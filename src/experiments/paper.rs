@@ -561,6 +561,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
             n,
             friction,
             gravity.then_some(gravity_path.as_path()),
+            settings.platforms.as_deref(),
         )
     };
     nn("NnCompensator", &friction_files[0], true)?;
@@ -777,7 +778,7 @@ fn adaptation_runs(
     let real = &arms.real.arm;
     let export = |id: &str, model: ModelSpec, sources: &[(String, PathBuf)]| -> Result<PathBuf, String> {
         let path = fmu_dir.join(format!("{id}.fmu"));
-        export_fmu(&FmuSpec { identifier: id.into(), model }, sources, &path)?;
+        export_fmu_for(&FmuSpec { identifier: id.into(), model }, sources, &path, settings.platforms.as_deref())?;
         Ok(path)
     };
     let ideal = |id: &str, arm: ArmParams, friction: bool| {

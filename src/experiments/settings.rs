@@ -76,6 +76,9 @@ pub struct Settings {
     pub quick: bool,
     /// The online-adaptation runs.
     pub adaptation: super::adaptation::AdaptationSettings,
+    /// Platforms every FMU of the run carries (`binaries/<platform>/`): `None` for the host's
+    /// and every cross build found, else exactly these (see [`crate::export::fmu_binaries`]).
+    pub platforms: Option<Vec<String>>,
 }
 
 impl Settings {
@@ -105,6 +108,7 @@ impl Settings {
             threads: std::thread::available_parallelism().map_or(2, |n| n.get()).min(4),
             quick: false,
             adaptation: super::adaptation::AdaptationSettings::full(),
+            platforms: None,
         }
     }
 

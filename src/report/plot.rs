@@ -128,8 +128,7 @@ pub fn write_png(path: &Path, title: &str, panels: &[Panel], columns: usize) -> 
         return Err(fail(format!("folder {} {problem}", dir.display())));
     }
     // The suffix matters: the bitmap backend picks the image format from the extension.
-    let tmp = tempfile::Builder::new()
-        .permissions(crate::table::readable_file())
+    let tmp = crate::table::readable_temp_file()
         .prefix(".neurarm-")
         .suffix(".png")
         .tempfile_in(dir)

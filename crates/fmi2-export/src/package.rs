@@ -1,9 +1,9 @@
-//! Packaging an FMU: `modelDescription.xml`, the model's shared library under
+//! Packaging an FMU: `modelDescription.xml`, the model's shared library for each platform under
 //! `binaries/<platform>/`, `resources/` and `documentation/index.html` in a zip, written
 //! atomically. The caller says which files go in; finding a build's output is its business.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::description::ModelDescription;
 
@@ -23,17 +23,163 @@ pub const PLATFORM: (&str, &str) = if cfg!(all(target_os = "linux", target_point
     ("unknown", "so")
 };
 
-/// Writes `path` as a `.fmu` with `binary` as `binaries/<platform>/<identifier>.<ext>` and
+/// The platform folders under `binaries/` this crate packs, and the extension of each one's
+/// shared library: FMI 2.0's names, and the FMI 3.0 tuple `aarch64-linux` (FMI 2.0.4 lets an
+/// FMU use FMI 3.0's names for platforms FMI 2.0 has none for). `linux64` may hold an x86_64
+/// or an aarch64 library: importers built for ARM Linux (fmpy among them) look there.
+pub const PLATFORMS: [(&str, &str); 7] = [
+    ("linux64", "so"),
+    ("linux32", "so"),
+    ("win64", "dll"),
+    ("win32", "dll"),
+    ("darwin64", "dylib"),
+    ("darwin32", "dylib"),
+    ("aarch64-linux", "so"),
+];
+
+/// The shared-library extension of platform folder `platform` (`"so"`, `"dll"`, `"dylib"`),
+/// `None` for a folder this crate does not know.
+pub fn library_extension(platform: &str) -> Option<&'static str> {
+    PLATFORMS.iter().find(|(p, _)| *p == platform).map(|(_, e)| *e)
+}
+
+/// Checks that `bytes` is a shared library a host of platform folder `platform` can load: its
+/// file format (ELF, PE, Mach-O or a universal Mach-O), word size and architecture. The error
+/// says what the file is instead, so a binary in the wrong folder is caught when the FMU is
+/// written, not when a user's tool fails to load it.
+pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), String> {
+    use object::read::macho::FatArch;
+    use object::{Architecture as A, BinaryFormat as F, Object};
+    let kind = object::FileKind::parse(bytes).map_err(|e| format!("not a shared library ({e})"))?;
+    let slices: Vec<(F, A)> = match kind {
+        object::FileKind::MachOFat32 => {
+            let fat = object::read::macho::MachOFatFile32::parse(bytes).map_err(|e| format!("a broken universal Mach-O ({e})"))?;
+            fat.arches().iter().map(|a| (F::MachO, a.architecture())).collect()
+        }
+        object::FileKind::MachOFat64 => {
+            let fat = object::read::macho::MachOFatFile64::parse(bytes).map_err(|e| format!("a broken universal Mach-O ({e})"))?;
+            fat.arches().iter().map(|a| (F::MachO, a.architecture())).collect()
+        }
+        _ => {
+            let file = object::File::parse(bytes).map_err(|e| format!("not a shared library ({e})"))?;
+            vec![(file.format(), file.architecture())]
+        }
+    };
+    let accepted: &[(F, A)] = match platform {
+        "linux64" => &[(F::Elf, A::X86_64), (F::Elf, A::Aarch64)],
+        "linux32" => &[(F::Elf, A::I386), (F::Elf, A::Arm)],
+        "win64" => &[(F::Pe, A::X86_64), (F::Pe, A::Aarch64)],
+        "win32" => &[(F::Pe, A::I386)],
+        "darwin64" => &[(F::MachO, A::X86_64), (F::MachO, A::Aarch64)],
+        "darwin32" => &[(F::MachO, A::I386)],
+        "aarch64-linux" => &[(F::Elf, A::Aarch64)],
+        _ => return Err(format!("unknown platform folder {platform:?} (known: {})", platform_names())),
+    };
+    let wrong: Vec<String> = slices.iter().filter(|s| !accepted.contains(s)).map(|(f, a)| format!("{f:?} {a:?}")).collect();
+    if slices.is_empty() || !wrong.is_empty() {
+        let is: Vec<String> = slices.iter().map(|(f, a)| format!("{f:?} {a:?}")).collect();
+        let want: Vec<String> = accepted.iter().map(|(f, a)| format!("{f:?} {a:?}")).collect();
+        return Err(format!("a {} library, not one for {platform} ({})", is.join(" + "), want.join(" or ")));
+    }
+    Ok(())
+}
+
+fn platform_names() -> String {
+    PLATFORMS.iter().map(|(p, _)| *p).collect::<Vec<_>>().join(", ")
+}
+
+/// Cargo's file name of library crate `name` built for platform folder `platform`
+/// (`libname.so`, `name.dll`, `libname.dylib`); `None` for an unknown folder.
+pub fn library_file_name(platform: &str, name: &str) -> Option<String> {
+    let extension = library_extension(platform)?;
+    Some(if extension == "dll" { format!("{name}.{extension}") } else { format!("lib{name}.{extension}") })
+}
+
+/// The binaries of library crate `name` to pack, `(platform folder, library)`: `host` (the
+/// library built for [`PLATFORM`]) and those under `cross_dir/<platform>/` with cargo's file
+/// name for the platform ([`library_file_name`]). With `wanted` `None`, `host` (required)
+/// and every cross build found; with `Some(list)`, exactly the platforms listed, and an error
+/// naming each one not built (`host` may then be `None` if the list leaves the host out).
+pub fn select_binaries(
+    host: Option<PathBuf>,
+    cross_dir: Option<&Path>,
+    name: &str,
+    wanted: Option<&[String]>,
+) -> Result<Vec<(String, PathBuf)>, String> {
+    let cross = |platform: &str| -> Option<PathBuf> {
+        let file = library_file_name(platform, name)?;
+        cross_dir.map(|d| d.join(platform).join(file)).filter(|p| p.is_file())
+    };
+    // A cross build older than the host's library was made from older sources: packing it
+    // would ship another model's binary under this description.
+    let fresh = |found: Vec<(String, PathBuf)>| -> Result<Vec<(String, PathBuf)>, String> {
+        let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+        let Some(host_time) = host.as_deref().and_then(modified) else { return Ok(found) };
+        let stale: Vec<&str> =
+            found.iter().filter(|(p, b)| p != PLATFORM.0 && modified(b).is_some_and(|t| t < host_time)).map(|(p, _)| p.as_str()).collect();
+        if stale.is_empty() {
+            Ok(found)
+        } else {
+            Err(format!("the {name} builds for {} are older than the {} one: rebuild them", stale.join(", "), PLATFORM.0))
+        }
+    };
+    let Some(wanted) = wanted else {
+        let host = host.clone().ok_or_else(|| format!("no {name} library built for {}", PLATFORM.0))?;
+        let mut found = vec![(PLATFORM.0.to_owned(), host)];
+        found.extend(PLATFORMS.iter().filter(|(p, _)| *p != PLATFORM.0).filter_map(|(p, _)| Some((p.to_string(), cross(p)?))));
+        return fresh(found);
+    };
+    if wanted.is_empty() {
+        return Err("no platform asked for".into());
+    }
+    let mut found: Vec<(String, PathBuf)> = Vec::new();
+    let mut missing = Vec::new();
+    for platform in wanted {
+        if library_extension(platform).is_none() {
+            return Err(format!("unknown platform {platform:?} (known: {})", platform_names()));
+        }
+        if found.iter().any(|(p, _)| p == platform) || missing.contains(&platform.as_str()) {
+            continue;
+        }
+        let binary = if platform == PLATFORM.0 { host.clone().filter(|p| p.is_file()) } else { cross(platform) };
+        match binary {
+            Some(p) => found.push((platform.clone(), p)),
+            None => missing.push(platform.as_str()),
+        }
+    }
+    if !missing.is_empty() {
+        let looked = cross_dir.map_or("no folder of cross builds".to_owned(), |d| format!("looked in {}", d.display()));
+        return Err(format!("no {name} library built for {} ({looked})", missing.join(", ")));
+    }
+    fresh(found)
+}
+
+/// Writes `path` as a `.fmu` with each `(platform, binary)` of `binaries` as
+/// `binaries/<platform>/<identifier>.<ext>` (each checked with [`check_binary`]) and
 /// `resources` as `(name, content)` pairs under `resources/`; `equations_html` goes into the
 /// documentation beside the table of variables. Nothing is left at `path` on failure.
 pub fn write_fmu(
     path: &Path,
     description: &ModelDescription,
-    binary: &Path,
+    binaries: &[(&str, &Path)],
     resources: &[(&str, Vec<u8>)],
     equations_html: &str,
 ) -> std::io::Result<()> {
-    let binary_bytes = std::fs::read(binary).map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", binary.display())))?;
+    let invalid = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, m);
+    if binaries.is_empty() {
+        return Err(invalid("no platform binary to pack".into()));
+    }
+    let mut libraries = Vec::with_capacity(binaries.len());
+    for (i, (platform, binary)) in binaries.iter().enumerate() {
+        if binaries[..i].iter().any(|(p, _)| p == platform) {
+            return Err(invalid(format!("platform {platform} given twice")));
+        }
+        let extension = library_extension(platform)
+            .ok_or_else(|| invalid(format!("unknown platform folder {platform:?} (known: {})", platform_names())))?;
+        let bytes = std::fs::read(binary).map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", binary.display())))?;
+        check_binary(platform, &bytes).map_err(|e| invalid(format!("{}: {e}", binary.display())))?;
+        libraries.push((format!("binaries/{platform}/{}.{extension}", description.model_identifier), bytes));
+    }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -51,8 +197,9 @@ pub fn write_fmu(
         zip.write_all(bytes)
     };
     add("modelDescription.xml".into(), description.to_xml().as_bytes(), options)?;
-    let (platform, extension) = PLATFORM;
-    add(format!("binaries/{platform}/{}.{extension}", description.model_identifier), &binary_bytes, exe_options)?;
+    for (name, bytes) in libraries {
+        add(name, &bytes, exe_options)?;
+    }
     for (name, bytes) in resources {
         add(format!("resources/{name}"), bytes, options)?;
     }

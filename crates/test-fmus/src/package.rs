@@ -35,7 +35,13 @@ pub fn fmu_in(dir: &Path, model: TestModel) -> Result<PathBuf, String> {
     let out = dir.join(format!("{}.fmu", model.identifier()));
     let built = model.build().map_err(|e| e.to_string())?;
     let resources = [(MODEL_FILE, model.identifier().as_bytes().to_vec())];
-    fmi2_export::package::write_fmu(&out, built.description(), &built_library()?, &resources, model.equations_html())
-        .map_err(|e| format!("writing {}: {e}", out.display()))?;
+    fmi2_export::package::write_fmu(
+        &out,
+        built.description(),
+        &[(fmi2_export::package::PLATFORM.0, &built_library()?)],
+        &resources,
+        model.equations_html(),
+    )
+    .map_err(|e| format!("writing {}: {e}", out.display()))?;
     Ok(out)
 }

@@ -12,11 +12,21 @@ pub const LIBRARY: &str = "libvan_der_pol.so";
 pub const EQUATIONS_HTML: &str = "<p><code>ẍ = μ (1 − x²) ẋ − x + u</code>, <code>x(t0) = x0</code>, \
 <code>ẋ(t0) = v0</code>; classic RK4 in sub-steps of at most 1 ms, with u held over each step.</p>";
 
-/// Writes the FMU of the library at `binary` to `out`.
-pub fn write_fmu(binary: &Path, out: &Path) -> Result<(), String> {
+/// Writes the FMU of the libraries `binaries`, `(platform folder, library)`, to `out`.
+pub fn write_fmu(binaries: &[(String, PathBuf)], out: &Path) -> Result<(), String> {
     let model = crate::VanDerPol::new().map_err(|e| e.to_string())?;
-    fmi2_export::package::write_fmu(out, model.description(), binary, &[], EQUATIONS_HTML)
+    let binaries: Vec<(&str, &Path)> = binaries.iter().map(|(p, b)| (p.as_str(), b.as_path())).collect();
+    fmi2_export::package::write_fmu(out, model.description(), &binaries, &[], EQUATIONS_HTML)
         .map_err(|e| format!("writing {}: {e}", out.display()))
+}
+
+/// The libraries to pack: the built one ([`built_library`]) and every cross build found in
+/// `$VAN_DER_POL_PLATFORMS`, else in `fmu-binaries/<platform>/` beside the built one
+/// (`scripts/build-platforms` puts them there).
+pub fn built_binaries() -> Result<Vec<(String, PathBuf)>, String> {
+    let host = built_library()?;
+    let cross = std::env::var_os("VAN_DER_POL_PLATFORMS").map(PathBuf::from).or_else(|| host.parent().map(|d| d.join("fmu-binaries")));
+    fmi2_export::package::select_binaries(Some(host), cross.as_deref(), "van_der_pol", None)
 }
 
 /// The built library: `$VAN_DER_POL_BINARY`, else beside the running program (or one folder
@@ -45,6 +55,6 @@ pub fn built_library() -> Result<PathBuf, String> {
 /// `VanDerPol.fmu` in `dir`, packaged from the built library.
 pub fn fmu_in(dir: &Path) -> Result<PathBuf, String> {
     let out = dir.join("VanDerPol.fmu");
-    write_fmu(&built_library()?, &out)?;
+    write_fmu(&built_binaries()?, &out)?;
     Ok(out)
 }
