@@ -53,7 +53,7 @@ pub fn cross_dir() -> Option<PathBuf> {
 /// one not built and how to build it.
 pub fn fmu_binaries(platforms: Option<&[String]>) -> Result<Vec<(String, PathBuf)>, String> {
     let host = if platforms.is_none_or(|w| w.iter().any(|p| p == PLATFORM.0)) { Some(find_binary()?) } else { None };
-    select_binaries(host, cross_dir().as_deref(), "neurarm_fmu", platforms).map_err(|e| {
+    let found = select_binaries(host, cross_dir().as_deref(), "neurarm_fmu", platforms).map_err(|e| {
         if e.starts_with("unknown platform") {
             e
         } else {
@@ -61,7 +61,41 @@ pub fn fmu_binaries(platforms: Option<&[String]>) -> Result<Vec<(String, PathBuf
                 "{e}; build them with scripts/build-platforms, or point NEURARM_FMU_PLATFORMS at a folder of <platform>/<library> builds"
             )
         }
-    })
+    })?;
+    same_sources(&found)?;
+    Ok(found)
+}
+
+/// The start of the marker every FMU binary carries (`fmu/build.rs`), followed by 16 hex
+/// digits: a hash of the sources it was built from.
+pub const SOURCES_MARKER: &[u8] = b"neurarm-fmu-sources:";
+
+/// The source hash in the FMU binary `bytes`, if it carries one.
+pub fn sources_of(bytes: &[u8]) -> Option<&str> {
+    let at = bytes.windows(SOURCES_MARKER.len()).position(|w| w == SOURCES_MARKER)? + SOURCES_MARKER.len();
+    let hash = bytes.get(at..at + 16)?;
+    hash.iter().all(u8::is_ascii_hexdigit).then(|| std::str::from_utf8(hash).ok()).flatten()
+}
+
+/// Checks that the binaries `(platform, library)` were all built from the same sources: a
+/// cross build left over from before a change would ship another model under this one's
+/// description. The error names the platforms to rebuild.
+pub fn same_sources(binaries: &[(String, PathBuf)]) -> Result<(), String> {
+    let mut hashes = Vec::with_capacity(binaries.len());
+    for (platform, path) in binaries {
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        hashes.push((platform.as_str(), sources_of(&bytes).map(str::to_owned)));
+    }
+    let Some(reference) = hashes.iter().find(|(p, _)| *p == PLATFORM.0).or(hashes.first()).cloned() else { return Ok(()) };
+    let differ: Vec<&str> = hashes.iter().filter(|(_, h)| *h != reference.1).map(|(p, _)| *p).collect();
+    if differ.is_empty() {
+        return Ok(());
+    }
+    Err(format!(
+        "the FMU binaries for {} were built from other sources than the {} one: rebuild them with scripts/build-platforms",
+        differ.join(", "),
+        reference.0
+    ))
 }
 
 /// Writes the FMU for `spec` to `path` with the binaries of every platform found: see
@@ -108,4 +142,42 @@ pub fn refuse_stdout(path: &Path) -> Result<(), String> {
         return Err("an FMU is a binary archive: give a .fmu file name with -o, not '-' (to pipe it, -o /dev/stdout)".into());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn library(dir: &Path, name: &str, hash: Option<&str>) -> PathBuf {
+        let path = dir.join(name);
+        let mut bytes = b"\x7fELF other bytes".to_vec();
+        if let Some(h) = hash {
+            bytes.extend_from_slice(SOURCES_MARKER);
+            bytes.extend_from_slice(h.as_bytes());
+            bytes.push(0);
+        }
+        std::fs::write(&path, bytes).unwrap();
+        path
+    }
+
+    #[test]
+    fn binaries_of_different_sources_are_not_packed_together() {
+        let d = tempfile::tempdir().unwrap();
+        let host = ("linux64".to_owned(), library(d.path(), "a", Some("0123456789abcdef")));
+        let same = ("win64".to_owned(), library(d.path(), "b", Some("0123456789abcdef")));
+        let other = ("darwin64".to_owned(), library(d.path(), "c", Some("fedcba9876543210")));
+        let unmarked = ("aarch64-linux".to_owned(), library(d.path(), "d", None));
+        same_sources(&[host.clone(), same.clone()]).unwrap();
+        let e = same_sources(&[host.clone(), same, other, unmarked]).unwrap_err();
+        assert!(e.contains("darwin64, aarch64-linux") && e.contains("than the linux64 one"), "{e}");
+        assert_eq!(sources_of(&std::fs::read(&host.1).unwrap()), Some("0123456789abcdef"));
+    }
+
+    #[test]
+    fn the_built_fmu_binary_carries_its_sources_hash() {
+        let binary = find_binary().expect("the FMU binary is built (cargo build --release -p neurarm-fmu)");
+        let bytes = std::fs::read(binary).unwrap();
+        let hash = sources_of(&bytes).expect("a marker");
+        assert_eq!(hash.len(), 16);
+    }
 }

@@ -2,3 +2,14 @@
 //! named after its model identifier; `resources/neurarm.toml` says which model it holds.
 
 fmi2_export::export_fmi2!(neurarm_models::instantiate);
+
+/// The marker of the sources this binary was built from (see `build.rs`): a NUL-terminated
+/// `neurarm-fmu-sources:<16 hex digits>`.
+static SOURCES: &str = concat!("neurarm-fmu-sources:", env!("NEURARM_FMU_SOURCES"), "\0");
+
+/// The marker of this build's sources, a NUL-terminated string (not part of FMI): exported so
+/// that the linker keeps it, and so that a tool can ask a loaded binary for it.
+#[no_mangle]
+pub extern "C" fn neurarm_fmu_sources() -> *const std::ffi::c_char {
+    SOURCES.as_ptr().cast()
+}

@@ -110,24 +110,11 @@ pub fn select_binaries(
         let file = library_file_name(platform, name)?;
         cross_dir.map(|d| d.join(platform).join(file)).filter(|p| p.is_file())
     };
-    // A cross build older than the host's library was made from older sources: packing it
-    // would ship another model's binary under this description.
-    let fresh = |found: Vec<(String, PathBuf)>| -> Result<Vec<(String, PathBuf)>, String> {
-        let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-        let Some(host_time) = host.as_deref().and_then(modified) else { return Ok(found) };
-        let stale: Vec<&str> =
-            found.iter().filter(|(p, b)| p != PLATFORM.0 && modified(b).is_some_and(|t| t < host_time)).map(|(p, _)| p.as_str()).collect();
-        if stale.is_empty() {
-            Ok(found)
-        } else {
-            Err(format!("the {name} builds for {} are older than the {} one: rebuild them", stale.join(", "), PLATFORM.0))
-        }
-    };
     let Some(wanted) = wanted else {
-        let host = host.clone().ok_or_else(|| format!("no {name} library built for {}", PLATFORM.0))?;
+        let host = host.ok_or_else(|| format!("no {name} library built for {}", PLATFORM.0))?;
         let mut found = vec![(PLATFORM.0.to_owned(), host)];
         found.extend(PLATFORMS.iter().filter(|(p, _)| *p != PLATFORM.0).filter_map(|(p, _)| Some((p.to_string(), cross(p)?))));
-        return fresh(found);
+        return Ok(found);
     };
     if wanted.is_empty() {
         return Err("no platform asked for".into());
@@ -151,7 +138,7 @@ pub fn select_binaries(
         let looked = cross_dir.map_or("no folder of cross builds".to_owned(), |d| format!("looked in {}", d.display()));
         return Err(format!("no {name} library built for {} ({looked})", missing.join(", ")));
     }
-    fresh(found)
+    Ok(found)
 }
 
 /// Writes `path` as a `.fmu` with each `(platform, binary)` of `binaries` as
