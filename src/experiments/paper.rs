@@ -591,13 +591,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         joint_space(None),
     ];
     for (name, spec) in LOOPS.iter().zip(&specs) {
-        let toml = systems_dir.join(format!("{name}.toml"));
-        let text = format!(
-            "# The {name} loop of `neurarm paper`; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
-            spec.to_toml()?
-        );
-        write_text_atomic(&toml, &text).map_err(writing(&toml))?;
-        fmi2_cosim::ssp::write_ssp(spec, &systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
+        write_loop_files(name, "", spec, &systems_dir, out)?;
     }
     let b = bar(specs.len() as u64, "closed loops");
     let tasks: Vec<(&str, SystemSpec)> = LOOPS.iter().copied().zip(specs).collect();
@@ -727,13 +721,7 @@ fn diagnostics(
         specs.extend([quiet(&bases.real_perfect), quiet(&bases.real_nn), quiet(&bases.real_none)]);
     }
     for (name, spec) in DIAGNOSTIC_LOOPS.iter().zip(&specs) {
-        let toml = systems_dir.join(format!("{name}.toml"));
-        let text = format!(
-            "# The {name} loop of `neurarm paper` (what bounds Table 1's ratios); rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
-            spec.to_toml()?
-        );
-        write_text_atomic(&toml, &text).map_err(writing(&toml))?;
-        fmi2_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
+        write_loop_files(name, " (what bounds Table 1's ratios)", spec, systems_dir, out)?;
     }
     let b = bar(specs.len() as u64, "diagnostic loops");
     let tasks: Vec<(&str, SystemSpec)> = DIAGNOSTIC_LOOPS.iter().copied().zip(specs).collect();
@@ -817,13 +805,7 @@ fn adaptation_runs(
     specs.extend((0..4).map(|c| adaptation::payload_system(&arm_real, &joint, &gravity_comps, c, &gains, payload_kg, settings)));
     specs.extend([1, 2].map(|c| adaptation::steady_system(&arm_real, &task, &friction_comps, c, &start, settings)));
     for (name, spec) in ADAPTATION_LOOPS.iter().zip(&specs) {
-        let toml = systems_dir.join(format!("{name}.toml"));
-        let text = format!(
-            "# The {name} loop of `neurarm paper` (online adaptation); rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
-            spec.to_toml()?
-        );
-        write_text_atomic(&toml, &text).map_err(writing(&toml))?;
-        fmi2_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())?;
+        write_loop_files(name, " (online adaptation)", spec, systems_dir, out)?;
     }
     let b = bar(specs.len() as u64, "online adaptation");
     let tasks: Vec<(&str, SystemSpec)> = ADAPTATION_LOOPS.iter().copied().zip(specs).collect();
@@ -870,4 +852,16 @@ fn adaptation_runs(
         failures,
     };
     Ok((results, loops))
+}
+
+/// Writes loop `name`'s system file (`systems_dir/<name>.toml`, headed by how to rerun it;
+/// `purpose` follows the loop's name in that header) and its SSP file (`out/<name>.ssp`).
+fn write_loop_files(name: &str, purpose: &str, spec: &SystemSpec, systems_dir: &Path, out: &Path) -> Result<(), String> {
+    let toml = systems_dir.join(format!("{name}.toml"));
+    let text = format!(
+        "# The {name} loop of `neurarm paper`{purpose}; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
+        spec.to_toml()?
+    );
+    write_text_atomic(&toml, &text).map_err(writing(&toml))?;
+    fmi2_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())
 }
