@@ -98,6 +98,36 @@ pub fn same_sources(binaries: &[(String, PathBuf)]) -> Result<(), String> {
     ))
 }
 
+/// The FMI version of an FMU to write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FmiVersion {
+    /// FMI 2.0 Co-Simulation.
+    Fmi2,
+    /// FMI 3.0 Co-Simulation.
+    Fmi3,
+}
+
+impl FmiVersion {
+    /// "2.0" or "3.0".
+    pub fn number(self) -> &'static str {
+        match self {
+            FmiVersion::Fmi2 => "2.0",
+            FmiVersion::Fmi3 => "3.0",
+        }
+    }
+}
+
+impl std::str::FromStr for FmiVersion {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "2" | "2.0" => Ok(FmiVersion::Fmi2),
+            "3" | "3.0" => Ok(FmiVersion::Fmi3),
+            other => Err(format!("FMI version {other:?}: 2 (FMI 2.0) or 3 (FMI 3.0)")),
+        }
+    }
+}
+
 /// Writes the FMU for `spec` to `path` with the binaries of every platform found: see
 /// [`export_fmu_for`].
 pub fn export_fmu(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path) -> Result<(), String> {
@@ -112,6 +142,19 @@ pub fn export_fmu(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path) ->
 /// device or FIFO gets the archive's bytes. `-` is refused: an FMU is a binary archive, not
 /// something for a terminal (`/dev/stdout` streams it to a pipe).
 pub fn export_fmu_for(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path, platforms: Option<&[String]>) -> Result<(), String> {
+    export_fmu_as(spec, sources, path, platforms, FmiVersion::Fmi2)
+}
+
+/// As [`export_fmu_for`], as an FMU of FMI version `version`: the same binary (it carries both
+/// versions' functions), resources and checks; the FMI 3.0 twin has FMI 3.0's model
+/// description and platform folders.
+pub fn export_fmu_as(
+    spec: &FmuSpec,
+    sources: &[(String, PathBuf)],
+    path: &Path,
+    platforms: Option<&[String]>,
+    version: FmiVersion,
+) -> Result<(), String> {
     refuse_stdout(path)?;
     let binaries = fmu_binaries(platforms)?;
     let staging = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
@@ -130,7 +173,74 @@ pub fn export_fmu_for(spec: &FmuSpec, sources: &[(String, PathBuf)], path: &Path
     let binaries: Vec<(&str, &Path)> = binaries.iter().map(|(p, b)| (p.as_str(), b.as_path())).collect();
     let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
     let packed = staging.path().join(format!("{}.fmu", spec.identifier));
-    fmi2_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html())
+    match version {
+        FmiVersion::Fmi2 => fmi2_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html()),
+        FmiVersion::Fmi3 => fmi3_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html()),
+    }
+    .map_err(|e| format!("packing {}: {e}", path.display()))?;
+    let bytes = std::fs::read(&packed).map_err(|e| format!("reading the packed {}: {e}", path.display()))?;
+    crate::output::write_bytes(path, &bytes).map_err(|e| format!("writing {}: {e}", path.display()))
+}
+
+/// Writes the FMI 3.0 twin of the neurarm FMI 2.0 FMU `fmi2_fmu` to `path`: the same model
+/// (its `resources/`, checked by building the model from them), the same binaries (moved into
+/// FMI 3.0's platform folders), an FMI 3.0 model description. Refused, saying why, for an
+/// archive that is not a neurarm FMU or whose binaries lack the `fmi3*` functions (made before
+/// neurarm exported FMI 3.0). Written as [`export_fmu_for`] writes: nothing is left at `path` on
+/// failure.
+pub fn export_fmi3_twin(fmi2_fmu: &Path, path: &Path) -> Result<(), String> {
+    use std::io::Read;
+    refuse_stdout(path)?;
+    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", fmi2_fmu.display());
+    let file = std::fs::File::open(fmi2_fmu).map_err(|e| at(&e))?;
+    let mut zip = zip::ZipArchive::new(file).map_err(|e| at(&format!("not an FMU archive ({e})")))?;
+    let staging = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
+    let resources_dir = staging.path().join("resources");
+    std::fs::create_dir_all(&resources_dir).map_err(|e| format!("staging: {e}"))?;
+    let mut resources: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut binaries: Vec<(String, PathBuf)> = Vec::new();
+    for i in 0..zip.len() {
+        let mut entry = zip.by_index(i).map_err(|e| at(&e))?;
+        if entry.is_dir() {
+            continue;
+        }
+        let Some(name) = entry.enclosed_name() else { return Err(at(&format!("entry {:?} escapes the archive", entry.name()))) };
+        let parts: Vec<String> = name.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+        let mut bytes = Vec::new();
+        entry.read_to_end(&mut bytes).map_err(|e| at(&e))?;
+        match parts.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+            ["resources", file] => {
+                std::fs::write(resources_dir.join(file), &bytes).map_err(|e| format!("staging {file}: {e}"))?;
+                resources.push((file.to_string(), bytes));
+            }
+            ["binaries", platform, file] => {
+                if !bytes.windows(10).any(|w| w == b"fmi3DoStep") {
+                    return Err(at(&format!(
+                        "its {platform} binary has no FMI 3.0 functions (made by a neurarm without FMI 3.0 export): export the FMU again, or with --fmi 3"
+                    )));
+                }
+                let folder = staging.path().join("binaries").join(platform);
+                std::fs::create_dir_all(&folder).map_err(|e| format!("staging: {e}"))?;
+                std::fs::write(folder.join(file), &bytes).map_err(|e| format!("staging {file}: {e}"))?;
+                binaries.push((platform.to_string(), folder.join(file)));
+            }
+            _ => {}
+        }
+    }
+    let spec_text = resources
+        .iter()
+        .find(|(n, _)| n == SPEC_FILE)
+        .map(|(_, b)| String::from_utf8_lossy(b).into_owned())
+        .ok_or_else(|| at(&format!("not a neurarm FMU (no resources/{SPEC_FILE})")))?;
+    let spec = FmuSpec::from_toml(&spec_text).map_err(|e| at(&format!("resources/{SPEC_FILE}: {e}")))?;
+    if binaries.is_empty() {
+        return Err(at(&"it carries no binaries"));
+    }
+    let model = spec.build_from(Some(&resources_dir)).map_err(|e| at(&e))?;
+    let binaries: Vec<(&str, &Path)> = binaries.iter().map(|(p, b)| (p.as_str(), b.as_path())).collect();
+    let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
+    let packed = staging.path().join(format!("{}.fmu", spec.identifier));
+    fmi3_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html())
         .map_err(|e| format!("packing {}: {e}", path.display()))?;
     let bytes = std::fs::read(&packed).map_err(|e| format!("reading the packed {}: {e}", path.display()))?;
     crate::output::write_bytes(path, &bytes).map_err(|e| format!("writing {}: {e}", path.display()))

@@ -60,7 +60,7 @@ enum Command {
     /// The whole path from logs to an FMU: identify friction (and gravity), train the nets, export
     /// the NnCompensator; every intermediate file is kept in a folder.
     Compensator(compensator::CompensatorArgs),
-    /// Build an FMI 2.0 Co-Simulation FMU.
+    /// Build an FMI 2.0 (or, with --fmi 3, FMI 3.0) Co-Simulation FMU.
     Export(export::ExportArgs),
     /// Train a two-layer network (tansig hidden layer, linear output) with Levenberg–Marquardt.
     ///

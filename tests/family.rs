@@ -94,6 +94,7 @@ fn run_one(seed: u64, joints: usize) -> String {
     // compensation (how much noise costs on each arm is printed, not asserted: on some arms the
     // noisy run happens to track better, see issue 24's notes).
     let sensors = &r.table_1.real_sensors;
+    assert!(r.table_1.diagnostic_failures.is_empty(), "diagnostic loops failed: {:?}", r.table_1.diagnostic_failures);
     let [quiet_perfect, quiet_nn, quiet_none] = sensors.quiet_mse_m2.expect("the emulated real arm has sensor noise");
     assert!(
         quiet_perfect < quiet_none,
@@ -101,7 +102,7 @@ fn run_one(seed: u64, joints: usize) -> String {
     );
     format!(
         "{seed:4} {joints:6} | {nn_perfect:14.3} {none_perfect:12.1} {real_nn_none:12.3} | {:.3} {:.3} {:.3} | {:.2} %, real {:.2} % | {:.2} %, {:.2} % | {joint_ratio:.2} | {:.1} %",
-        sensors.perfect_over_none,
+        sensors.perfect_over_none.unwrap_or(f64::NAN),
         quiet_nn / quiet_none,
         quiet_perfect / quiet_none,
         100.0 * worst_net,

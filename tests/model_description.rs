@@ -1,5 +1,5 @@
-//! The committed `modelDescription/*.xml` files are what the code generates (nobody edits
-//! them by hand). To accept a deliberate change of a model's interface, run
+//! The committed `modelDescription/*.xml` files (FMI 2.0) and `*.fmi3.xml` (the FMI 3.0 twins)
+//! are what the code generates (nobody edits them by hand). To accept a deliberate change of a model's interface, run
 //! `NEURARM_UPDATE_MODEL_DESCRIPTIONS=1 cargo test --test model_description` and commit.
 
 use std::path::Path;
@@ -9,10 +9,15 @@ use neurarm_models::FmuSpec;
 use neurarm_physics::config::ArmConfig;
 
 fn check(name: &str, spec: FmuSpec) {
-    let xml = spec.description().unwrap().to_xml();
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription").join(format!("{name}.xml"));
+    let description = spec.description().unwrap();
+    compare(&format!("{name}.xml"), &description.to_xml());
+    compare(&format!("{name}.fmi3.xml"), &fmi3_export::description::to_xml(&description));
+}
+
+fn compare(file: &str, xml: &str) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription").join(file);
     if std::env::var_os("NEURARM_UPDATE_MODEL_DESCRIPTIONS").is_some() {
-        std::fs::write(&path, &xml).unwrap();
+        std::fs::write(&path, xml).unwrap();
     }
     let committed = std::fs::read_to_string(&path).unwrap_or_default();
     assert!(
@@ -45,6 +50,27 @@ fn model_structure_indices_are_one_based_positions_of_outputs() {
     assert!(xml[start..end].contains("dependencies=\"\""));
     assert!(!xml.contains("canHandleMultipleSetPerTimeInstant"));
     assert!(xml.contains("canNotUseMemoryManagementFunctions=\"true\""));
+}
+
+#[test]
+fn fmi3_value_references_are_positions_and_unique() {
+    let d = FmuSpec::planar_arm("PlanarArm", ArmConfig::default()).description().unwrap();
+    let xml = fmi3_export::description::to_xml(&d);
+    let start = xml.find("<ModelVariables>").unwrap();
+    let end = xml.find("</ModelVariables>").unwrap();
+    let vrs: Vec<u32> = xml[start..end].split("valueReference=\"").skip(1).map(|s| s[..s.find('"').unwrap()].parse().unwrap()).collect();
+    assert_eq!(vrs, (0..d.variables.len() as u32).collect::<Vec<_>>());
+    // The Integer noise_seed shares FMI 2.0 value reference 0 with time; in FMI 3.0 they differ.
+    let seed = d.variables.iter().position(|v| v.name == "noise_seed").unwrap();
+    assert_eq!(d.variables[seed].value_reference, 0);
+    assert!(xml.contains(&format!("<Int32 name=\"noise_seed\" valueReference=\"{seed}\"")));
+    let structure = &xml[xml.find("<ModelStructure>").unwrap()..];
+    let outputs: Vec<usize> = d.variables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, _)| i).collect();
+    let listed: Vec<usize> =
+        structure.split("<Output valueReference=\"").skip(1).map(|s| s[..s.find('"').unwrap()].parse().unwrap()).collect();
+    assert_eq!(listed, outputs);
+    assert!(xml.contains(&format!("instantiationToken=\"{}\"", d.guid())));
+    assert!(!xml.contains("canNotUseMemoryManagementFunctions"), "not an FMI 3.0 attribute");
 }
 
 #[test]
@@ -117,12 +143,9 @@ fn nn_compensator_model_description_has_not_drifted() {
             enable_gravity: true,
         }),
     };
-    let xml = spec.build_from(Some(dir.path())).unwrap().description().to_xml();
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("modelDescription").join("NnCompensator.xml");
-    if std::env::var_os("NEURARM_UPDATE_MODEL_DESCRIPTIONS").is_some() {
-        std::fs::write(&path, &xml).unwrap();
-    }
-    assert!(std::fs::read_to_string(&path).unwrap_or_default() == xml, "{} differs from the generated description", path.display());
+    let model = spec.build_from(Some(dir.path())).unwrap();
+    compare("NnCompensator.xml", &model.description().to_xml());
+    compare("NnCompensator.fmi3.xml", &fmi3_export::description::to_xml(model.description()));
 }
 
 /// A friction net whose input is encoded as angles is refused by name; a periodic gravity net

@@ -1,7 +1,10 @@
-//! The one FMI 2.0 Co-Simulation binary behind every neurarm FMU. Each `.fmu` ships a copy
-//! named after its model identifier; `resources/neurarm.toml` says which model it holds.
+//! The one binary behind every neurarm FMU, FMI 2.0 and FMI 3.0 Co-Simulation alike: it
+//! carries both versions' functions (`fmi2*` and `fmi3*`, which do not clash) over the same
+//! models. Each `.fmu` ships a copy named after its model identifier; `resources/neurarm.toml`
+//! says which model it holds.
 
 fmi2_export::export_fmi2!(neurarm_models::instantiate);
+fmi3_export::export_fmi3!(neurarm_models::instantiate);
 
 /// The marker of the sources this binary was built from (see `build.rs`): a NUL-terminated
 /// `neurarm-fmu-sources:<16 hex digits>`.

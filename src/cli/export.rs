@@ -1,11 +1,12 @@
-//! `neurarm export arm|compensator|controller task-space|joint`: FMI 2.0 Co-Simulation FMUs of
-//! the arm, the compensators (NN, ideal, adaptive) and the paper's controllers.
+//! `neurarm export arm|compensator|controller task-space|joint|fmi3`: FMI 2.0 or FMI 3.0
+//! Co-Simulation FMUs of the arm, the compensators (NN, ideal, adaptive) and the paper's
+//! controllers, and the FMI 3.0 twin of an FMI 2.0 FMU neurarm made.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::{Args, Subcommand};
-use neurarm::export::export_fmu_for;
+use neurarm::export::{export_fmi3_twin, export_fmu_as, FmiVersion};
 use neurarm_models::{
     AdaptationLaw, AdaptiveCompensatorSpec, FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec,
     PlanarArmSpec, TaskSpaceControllerSpec,
@@ -22,6 +23,10 @@ pub struct ExportArgs {
     what: Export,
     #[command(flatten)]
     platforms: PlatformArgs,
+    /// FMI version of the FMU written: 2 (FMI 2.0) or 3 (FMI 3.0 Co-Simulation, the same model
+    /// and binary).
+    #[arg(long, default_value = "2", global = true)]
+    fmi: FmiVersion,
 }
 
 /// The subcommands of `neurarm export`. Its help text is the doc of `Command::Export` in
@@ -82,6 +87,15 @@ pub enum Export {
     /// names are those the loops of `neurarm paper` connect.
     #[command(subcommand)]
     Controller(Controller),
+    /// The FMI 3.0 twin of an FMI 2.0 FMU made by neurarm: the same model, resources and
+    /// binaries, with an FMI 3.0 model description and platform folders.
+    Fmi3 {
+        /// The FMI 2.0 FMU.
+        input: PathBuf,
+        /// Output .fmu file (`-` is refused: pipe it with /dev/stdout).
+        #[arg(long, short = 'o')]
+        output: PathBuf,
+    },
 }
 
 /// The subcommands of `neurarm export controller`. Its help text is the doc of
@@ -155,12 +169,18 @@ pub enum Controller {
 
 /// Runs `neurarm export`.
 pub fn run(args: ExportArgs) -> Result<()> {
-    let platforms = args.platforms.checked()?;
     let command = args.what;
+    // The twin takes its binaries from the FMU it is made from, not from this build.
+    let platforms = if matches!(command, Export::Fmi3 { .. }) { None } else { args.platforms.checked()? };
+    let version = args.fmi;
     let export = |spec: FmuSpec, sources: &[(String, PathBuf)], output: &std::path::Path, joints: usize| {
-        write_fmu(spec, sources, output, joints, platforms.as_deref())
+        write_fmu(spec, sources, output, joints, platforms.as_deref(), version)
     };
     match command {
+        Export::Fmi3 { input, output } => {
+            export_fmi3_twin(&input, &output).map_err(anyhow::Error::msg)?;
+            eprintln!("wrote {} (FMI 3.0 twin of {})", output.display(), input.display());
+        }
         Export::Arm { arm, name, output } => {
             let (config, initial) = arm.load()?;
             let n = config.arm.dof();
@@ -275,8 +295,9 @@ fn write_fmu(
     output: &std::path::Path,
     joints: usize,
     platforms: Option<&[String]>,
+    version: FmiVersion,
 ) -> Result<()> {
-    export_fmu_for(&spec, sources, output, platforms).map_err(anyhow::Error::msg)?;
-    eprintln!("wrote {} ({}, {joints} joints)", output.display(), spec.identifier);
+    export_fmu_as(&spec, sources, output, platforms, version).map_err(anyhow::Error::msg)?;
+    eprintln!("wrote {} ({}, {joints} joints, FMI {})", output.display(), spec.identifier, version.number());
     Ok(())
 }

@@ -29,6 +29,10 @@ pub struct PaperArgs {
     output: PathBuf,
     #[command(flatten)]
     platforms: PlatformArgs,
+    /// Also write the FMI 3.0 twin of every FMU into fmu/fmi3/ (same models and binaries; the
+    /// loops of the run use the FMI 2.0 ones).
+    #[arg(long)]
+    fmi3: bool,
     /// A reduced run (3⁴ gravity grid, coarse friction levels, one period of tracking).
     #[arg(long)]
     quick: bool,
@@ -125,9 +129,11 @@ pub fn run(args: PaperArgs) -> Result<()> {
         friction_max_speed,
         intent_horizon,
         platforms,
+        fmi3,
     } = args;
     let mut settings = if quick { Settings::quick() } else { Settings::paper() };
     settings.platforms = platforms.checked()?;
+    settings.fmi3 = fmi3;
     if let Some(s) = seed {
         settings.seed = s;
     }
@@ -189,11 +195,14 @@ pub fn run(args: PaperArgs) -> Result<()> {
     );
     let sensors = &t.real_sensors;
     let quiet = sensors.quiet_nn_over_none.map_or(String::new(), |r| format!("; sensor noise off: real NN/none {r:.3}"));
+    let law = sensors.perfect_over_none.map_or("failed".to_owned(), |r| format!("{r:.3}"));
     eprintln!(
-        "real arm, true positions: NN/none {:.3}, true friction law/none {:.3}{quiet}",
-        t.true_mse_m2.real_nn / t.true_mse_m2.real_none,
-        sensors.perfect_over_none
+        "real arm, true positions: NN/none {:.3}, true friction law/none {law}{quiet}",
+        t.true_mse_m2.real_nn / t.true_mse_m2.real_none
     );
+    for failure in &t.diagnostic_failures {
+        eprintln!("warning: diagnostic loop {failure}");
+    }
     eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
     Ok(())
 }

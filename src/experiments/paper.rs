@@ -73,10 +73,11 @@ pub const LAW_ERROR: f64 = 0.01;
 pub struct LawSensitivity {
     /// The relative error applied [1].
     pub law_error: f64,
-    /// The law scaled by 1 − `law_error`: MSE over perfect's.
-    pub low_over_perfect: f64,
-    /// The law scaled by 1 + `law_error`: MSE over perfect's.
-    pub high_over_perfect: f64,
+    /// The law scaled by 1 − `law_error`: MSE over perfect's (`None` if the loop failed, see
+    /// [`Table1::diagnostic_failures`]).
+    pub low_over_perfect: Option<f64>,
+    /// The law scaled by 1 + `law_error`: MSE over perfect's (`None` if the loop failed).
+    pub high_over_perfect: Option<f64>,
 }
 
 /// What the real arm's sensors cost its friction compensation, from the [`DIAGNOSTIC_LOOPS`]; all
@@ -89,11 +90,13 @@ pub struct LawSensitivity {
 /// switch off only the noise (`q_noise_std`, `qd_noise_std` set to 0).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct SensorLimit {
-    /// The real arm's true friction law fed the same measured speed as the NN [m²].
-    pub perfect_mse_m2: f64,
+    /// The real arm's true friction law fed the same measured speed as the NN [m²] (`None` if
+    /// the loop failed, see [`Table1::diagnostic_failures`]).
+    pub perfect_mse_m2: Option<f64>,
     /// `perfect_mse_m2` over the uncompensated run's (Table 1's real none, true positions).
-    pub perfect_over_none: f64,
-    /// With the noise off, if the real arm has any: true law, NN, none [m²].
+    pub perfect_over_none: Option<f64>,
+    /// With the noise off, if the real arm has any and all three loops ran: true law, NN,
+    /// none [m²].
     pub quiet_mse_m2: Option<[f64; 3]>,
     /// With the noise off: NN / none.
     pub quiet_nn_over_none: Option<f64>,
@@ -150,6 +153,10 @@ pub struct Table1 {
     pub sim_law_sensitivity: LawSensitivity,
     /// What the real arm's sensors cost its compensation.
     pub real_sensors: SensorLimit,
+    /// The [`DIAGNOSTIC_LOOPS`] that failed, each "name: why" (a loop that goes unstable, e.g.
+    /// the real arm's true law on a quiet but quantised speed): their figures are missing, the
+    /// rest of the run stands.
+    pub diagnostic_failures: Vec<String>,
     /// The paper's values [m²].
     pub paper_m2: Cases,
     /// Geometric mean over the five cases of paper / ours (measured MSE).
@@ -622,6 +629,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         ratios: Ratios::of(&mse),
         sim_law_sensitivity: LawSensitivity::default(),
         real_sensors: SensorLimit::default(),
+        diagnostic_failures: Vec::new(),
         paper_m2: paper,
         paper_over_ours: log_ratio.exp(),
     };
@@ -633,7 +641,7 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     };
     lap("closed loops", log);
     let noisy = arms.real.hardware.q_noise_std_rad > 0.0 || arms.real.hardware.qd_noise_std_rad_s > 0.0;
-    let (sim_law_sensitivity, real_sensors) = diagnostics(
+    let (sim_law_sensitivity, real_sensors, diagnostic_failures) = diagnostics(
         &DiagnosticBases {
             sim_perfect: tracking(&arm, Some(rel(&fmus.ideal_friction))),
             real_nn: tracking(&arm_real, Some(rel(&nn_real))),
@@ -647,12 +655,20 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
         &systems_dir,
         settings.threads,
     )?;
-    let table_1 = Table1 { sim_law_sensitivity, real_sensors, ..table_1 };
+    for failure in &diagnostic_failures {
+        log(&format!("diagnostic loop {failure} (its figures are left out)"));
+    }
+    let table_1 = Table1 { sim_law_sensitivity, real_sensors, diagnostic_failures, ..table_1 };
     lap("diagnostic loops", log);
 
     let (adaptation, adaptation_loops) =
         adaptation_runs(out, &fmu_dir, &systems_dir, arms, settings, &fmus.ideal_friction_real, &friction_files[1], &gravity_path)?;
     lap("online adaptation", log);
+
+    if settings.fmi3 {
+        write_fmi3_twins(&fmu_dir)?;
+        lap("FMI 3.0 twins", log);
+    }
 
     let (near, far) = arms.placement.distance_range();
     let setup = RunSetup {
@@ -682,6 +698,23 @@ fn compute(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&st
     Ok(PaperRun { results, friction_pairs, friction_nets, gravity_pairs, loops, adaptation_loops, arms: arms.clone() })
 }
 
+/// Writes the FMI 3.0 twin of every FMU in `fmu_dir` into `fmu_dir/fmi3/`, same file names.
+fn write_fmi3_twins(fmu_dir: &Path) -> Result<(), String> {
+    let twins = fmu_dir.join("fmi3");
+    std::fs::create_dir_all(&twins).map_err(|e| format!("{}: {e}", twins.display()))?;
+    let mut fmus: Vec<PathBuf> = std::fs::read_dir(fmu_dir)
+        .map_err(|e| format!("{}: {e}", fmu_dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "fmu"))
+        .collect();
+    fmus.sort();
+    for fmu in fmus {
+        let name = fmu.file_name().expect("a file from read_dir has a name");
+        crate::export::export_fmi3_twin(&fmu, &twins.join(name))?;
+    }
+    Ok(())
+}
+
 /// The Table 1 systems the [`DIAGNOSTIC_LOOPS`] are built from.
 struct DiagnosticBases {
     sim_perfect: SystemSpec,
@@ -701,7 +734,7 @@ fn diagnostics(
     out: &Path,
     systems_dir: &Path,
     threads: usize,
-) -> Result<(LawSensitivity, SensorLimit), String> {
+) -> Result<(LawSensitivity, SensorLimit, Vec<String>), String> {
     let set = |mut spec: SystemSpec, unit: &str, values: &[(String, f64)]| {
         if let Some(entry) = spec.fmu.iter_mut().find(|f| f.name == unit) {
             for (name, value) in values {
@@ -725,24 +758,30 @@ fn diagnostics(
     }
     let b = bar(specs.len() as u64, "diagnostic loops");
     let tasks: Vec<(&str, SystemSpec)> = DIAGNOSTIC_LOOPS.iter().copied().zip(specs).collect();
-    let runs = parallel(tasks, threads, |(name, spec)| run_loop(&spec, systems_dir).map_err(|e| format!("loop {name}: {e}")), || b.inc(1))?;
+    // A diagnostic loop that fails (goes unstable) takes only its own figures with it.
+    let runs = parallel(tasks, threads, |(name, spec)| Ok(run_loop(&spec, systems_dir).map_err(|e| format!("{name}: {e}"))), || b.inc(1))?;
     b.finish_and_clear();
-    let errors: Vec<TrackingErrors> = runs.iter().map(tracking_errors).collect();
+    let failures: Vec<String> = runs.iter().filter_map(|r| r.as_ref().err().cloned()).collect();
+    let errors: Vec<Option<TrackingErrors>> = runs.iter().map(|r| r.as_ref().ok().map(tracking_errors)).collect();
+    let measured = |k: usize| errors[k].as_ref().map(|e| e.measured_mse_m2);
+    let true_mse = |k: usize| errors.get(k).and_then(|e| e.as_ref()).map(|e| e.true_mse_m2);
     let sensitivity = LawSensitivity {
         law_error: LAW_ERROR,
-        low_over_perfect: errors[0].measured_mse_m2 / table_1.mse_m2.sim_perfect,
-        high_over_perfect: errors[1].measured_mse_m2 / table_1.mse_m2.sim_perfect,
+        low_over_perfect: measured(0).map(|m| m / table_1.mse_m2.sim_perfect),
+        high_over_perfect: measured(1).map(|m| m / table_1.mse_m2.sim_perfect),
     };
-    let true_mse: Vec<f64> = errors.iter().map(|e| e.true_mse_m2).collect();
-    let quiet_mse = noisy.then(|| [true_mse[3], true_mse[4], true_mse[5]]);
+    let quiet_mse = match (noisy, true_mse(3), true_mse(4), true_mse(5)) {
+        (true, Some(p), Some(nn), Some(none)) => Some([p, nn, none]),
+        _ => None,
+    };
     let sensors = SensorLimit {
-        perfect_mse_m2: true_mse[2],
-        perfect_over_none: true_mse[2] / table_1.true_mse_m2.real_none,
+        perfect_mse_m2: true_mse(2),
+        perfect_over_none: true_mse(2).map(|m| m / table_1.true_mse_m2.real_none),
         quiet_mse_m2: quiet_mse,
         quiet_nn_over_none: quiet_mse.map(|m| m[1] / m[2]),
         quiet_perfect_over_none: quiet_mse.map(|m| m[0] / m[2]),
     };
-    Ok((sensitivity, sensors))
+    Ok((sensitivity, sensors, failures))
 }
 
 /// The online-adaptation runs on the real arm ([`adaptation`]): exports their compensators

@@ -79,6 +79,9 @@ pub struct Settings {
     /// Platforms every FMU of the run carries (`binaries/<platform>/`): `None` for the host's
     /// and every cross build found, else exactly these (see [`crate::export::fmu_binaries`]).
     pub platforms: Option<Vec<String>>,
+    /// Also write the FMI 3.0 twin of every FMU of the run into `fmu/fmi3/` (the loops run on
+    /// the FMI 2.0 ones).
+    pub fmi3: bool,
 }
 
 impl Settings {
@@ -109,6 +112,7 @@ impl Settings {
             quick: false,
             adaptation: super::adaptation::AdaptationSettings::full(),
             platforms: None,
+            fmi3: false,
         }
     }
 

@@ -225,32 +225,33 @@ pub fn report_markdown(run: &PaperRun) -> String {
         );
     }
     let law = &t.sim_law_sensitivity;
-    let (low, high) = (law.low_over_perfect, law.high_over_perfect);
     let worst_sim_net = r.friction.iter().filter(|f| f.arm == "sim").map(|f| f.net_error_share).fold(0.0, f64::max);
-    let reading = if low.min(high) > SIM_NN_OVER_PERFECT_TARGET {
-        format!(
-            " Even a law {pct:.0} % off tracks worse than NN/perfect ≤ {SIM_NN_OVER_PERFECT_TARGET} allows: the exact law leaves so \
-             little error that the ratio measures the compensator's accuracy below 1 % (the nets here: within {:.1} % of each joint's \
-             largest friction torque).",
-            100.0 * worst_sim_net,
-            pct = 100.0 * law.law_error
-        )
-    } else if (low - 1.0).abs().max((high - 1.0).abs()) > SIM_NN_OVER_PERFECT_TARGET - 1.0 {
-        format!(
-            " A {pct:.0} % change of the law itself moves the ratio by more than the target's margin (stick–slip makes the \
-             error sensitive to small changes), so NN/perfect differences within that scatter say little.",
-            pct = 100.0 * law.law_error
-        )
-    } else {
-        String::new()
-    };
-    let _ = writeln!(
-        s,
-        "**What NN/perfect can tell.** The simulated arm tracked with its own true friction law scaled by {:.2} and {:.2} gives \
-         {low:.3} and {high:.3} × the exact law's MSE (`systems/tracking_sim_perfect_low.toml`, `_high.toml`).{reading}\n",
-        1.0 - law.law_error,
-        1.0 + law.law_error
-    );
+    if let (Some(low), Some(high)) = (law.low_over_perfect, law.high_over_perfect) {
+        let reading = if low.min(high) > SIM_NN_OVER_PERFECT_TARGET {
+            format!(
+                " Even a law {pct:.0} % off tracks worse than NN/perfect ≤ {SIM_NN_OVER_PERFECT_TARGET} allows: the exact law leaves so \
+                 little error that the ratio measures the compensator's accuracy below 1 % (the nets here: within {:.1} % of each joint's \
+                 largest friction torque).",
+                100.0 * worst_sim_net,
+                pct = 100.0 * law.law_error
+            )
+        } else if (low - 1.0).abs().max((high - 1.0).abs()) > SIM_NN_OVER_PERFECT_TARGET - 1.0 {
+            format!(
+                " A {pct:.0} % change of the law itself moves the ratio by more than the target's margin (stick–slip makes the \
+                 error sensitive to small changes), so NN/perfect differences within that scatter say little.",
+                pct = 100.0 * law.law_error
+            )
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            s,
+            "**What NN/perfect can tell.** The simulated arm tracked with its own true friction law scaled by {:.2} and {:.2} gives \
+             {low:.3} and {high:.3} × the exact law's MSE (`systems/tracking_sim_perfect_low.toml`, `_high.toml`).{reading}\n",
+            1.0 - law.law_error,
+            1.0 + law.law_error
+        );
+    }
     let sensors = &t.real_sensors;
     let quiet = match (sensors.quiet_nn_over_none, sensors.quiet_perfect_over_none) {
         (Some(nn), Some(perfect)) => {
@@ -258,19 +259,27 @@ pub fn report_markdown(run: &PaperRun) -> String {
         }
         _ => String::new(),
     };
-    let verdict = if sensors.perfect_over_none >= true_real_ratio {
-        " Even the true law, fed the measured speed, does no better than the net here: a friction step at zero speed \
-         switches on the speed's noise, so the sensors, not the nets, bound real NN/none (a filtered speed or a dead \
-         band at rest would be the remedy, not better nets)."
-    } else {
-        ""
-    };
-    let _ = writeln!(
-        s,
-        "**What the sensors cost.** Fed the same measured speed as the net, the {real} arm's true friction law tracks with \
-         {:.3} × the uncompensated MSE (true positions; `systems/tracking_real_perfect.toml`).{quiet}{verdict}\n",
-        sensors.perfect_over_none
-    );
+    if let Some(perfect_over_none) = sensors.perfect_over_none {
+        let verdict = if perfect_over_none >= true_real_ratio {
+            " Even the true law, fed the measured speed, does no better than the net here: a friction step at zero speed \
+             switches on the speed's noise, so the sensors, not the nets, bound real NN/none (a filtered speed or a dead \
+             band at rest would be the remedy, not better nets)."
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            "**What the sensors cost.** Fed the same measured speed as the net, the {real} arm's true friction law tracks with \
+             {perfect_over_none:.3} × the uncompensated MSE (true positions; `systems/tracking_real_perfect.toml`).{quiet}{verdict}\n",
+        );
+    }
+    if !t.diagnostic_failures.is_empty() {
+        let _ = writeln!(
+            s,
+            "**Diagnostic loops that failed** (their figures are left out; Table 1 itself is not affected): {}.\n",
+            t.diagnostic_failures.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join("; ")
+        );
+    }
     if q.sim_none_over_perfect < LITTLE_FRICTION_RATIO {
         let _ = writeln!(
             s,

@@ -20,7 +20,8 @@ def neurarm() -> pathlib.Path:
 
 @pytest.fixture(scope="session")
 def paper(neurarm, tmp_path_factory) -> pathlib.Path:
-    """`neurarm paper --quick`'s output folder: systems/*.toml, *.ssp, fmu/, data/."""
+    """`neurarm paper --quick --fmi3`'s output folder: systems/*.toml, *.ssp, fmu/ (and the FMI
+    3.0 twins in fmu/fmi3/), data/."""
     out = tmp_path_factory.mktemp("paper")
-    subprocess.run([neurarm, "paper", "--quick", "-o", out], check=True, capture_output=True)
+    subprocess.run([neurarm, "paper", "--quick", "--fmi3", "-o", out], check=True, capture_output=True)
     return out

@@ -85,7 +85,7 @@ pub struct Unit {
 }
 
 /// Names of the SI base units in [`Unit::exponents`] order, as `BaseUnit` attributes.
-const BASE_UNITS: [&str; 8] = ["kg", "m", "s", "A", "K", "mol", "cd", "rad"];
+pub const BASE_UNITS: [&str; 8] = ["kg", "m", "s", "A", "K", "mol", "cd", "rad"];
 
 impl Unit {
     /// The second, the unit of time.

@@ -111,6 +111,52 @@ impl Function {
     }
 }
 
+/// Which FMI version's C API drives an instance. The rules are the same (the FMI 2.0
+/// Co-Simulation state machine covers FMI 3.0 Co-Simulation without event mode); only the
+/// function names in log messages differ.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Api {
+    /// FMI 2.0: `fmi2DoStep`, `fmi2GetReal`, …
+    #[default]
+    Fmi2,
+    /// FMI 3.0: `fmi3DoStep`, `fmi3GetFloat64`, …
+    Fmi3,
+}
+
+impl Api {
+    /// The name of the function of this API that does what the FMI 2.0 function `fmi2_name`
+    /// does (`fmi2SetupExperiment` is part of `fmi3EnterInitializationMode`, the status
+    /// queries are results of `fmi3DoStep`); a name it does not know is returned as it is.
+    pub fn name(self, fmi2_name: &str) -> &str {
+        if self == Api::Fmi2 {
+            return fmi2_name;
+        }
+        match fmi2_name {
+            "fmi2SetDebugLogging" => "fmi3SetDebugLogging",
+            "fmi2SetupExperiment" | "fmi2EnterInitializationMode" => "fmi3EnterInitializationMode",
+            "fmi2ExitInitializationMode" => "fmi3ExitInitializationMode",
+            "fmi2Terminate" => "fmi3Terminate",
+            "fmi2Reset" => "fmi3Reset",
+            "fmi2GetReal" => "fmi3GetFloat64",
+            "fmi2SetReal" => "fmi3SetFloat64",
+            "fmi2GetInteger" => "fmi3GetInt32",
+            "fmi2SetInteger" => "fmi3SetInt32",
+            "fmi2GetBoolean" => "fmi3GetBoolean",
+            "fmi2SetBoolean" => "fmi3SetBoolean",
+            "fmi2GetString" => "fmi3GetString",
+            "fmi2SetString" => "fmi3SetString",
+            "fmi2DoStep" | "fmi2GetRealStatus" | "fmi2GetBooleanStatus" => "fmi3DoStep",
+            "fmi2GetFMUstate" => "fmi3GetFMUState",
+            "fmi2SetFMUstate" => "fmi3SetFMUState",
+            "fmi2FreeFMUstate" => "fmi3FreeFMUState",
+            "fmi2SerializedFMUstateSize" => "fmi3SerializedFMUStateSize",
+            "fmi2SerializeFMUstate" => "fmi3SerializeFMUState",
+            "fmi2DeSerializeFMUstate" => "fmi3DeserializeFMUState",
+            other => other,
+        }
+    }
+}
+
 /// Receives the instance's log messages: status, category, message.
 pub type LogSink = Box<dyn Fn(Status, &str, &str) + Send>;
 
@@ -175,6 +221,8 @@ pub struct Instance {
     /// ones checked for NaN and infinities after every call. Inputs and parameters change only
     /// through checked sets, start values and restored states.
     computed_reals: Vec<u32>,
+    /// The C API driving the instance, for the function names in messages.
+    api: Api,
 }
 
 /// What the hot get/set paths need of a variable, precomputed: its index in the description
@@ -297,7 +345,19 @@ impl Instance {
             categories: LOG_CATEGORIES.iter().map(|_| debug_logging).collect(),
             lookup,
             computed_reals,
+            api: Api::Fmi2,
         })
+    }
+
+    /// The same instance, naming the functions of `api` in its messages.
+    pub fn with_api(mut self, api: Api) -> Self {
+        self.api = api;
+        self
+    }
+
+    /// The C API driving the instance.
+    pub fn api(&self) -> Api {
+        self.api
     }
 
     /// The instance name.
@@ -335,6 +395,7 @@ impl Instance {
 
     /// Checks that `function` (named `name` in messages) may be called now.
     pub fn check_phase(&self, name: &str, function: Function) -> Result<(), Status> {
+        let name = self.api.name(name);
         if function.allowed() & self.phase as u16 != 0 {
             Ok(())
         } else {
@@ -353,7 +414,11 @@ impl Instance {
                 Some(i) => chosen[i] = true,
                 None => {
                     let known: Vec<&str> = LOG_CATEGORIES.iter().map(|x| x.name).collect();
-                    return self.error(&format!("fmi2SetDebugLogging: unknown log category '{c}' (known: {})", known.join(", ")));
+                    return self.error(&format!(
+                        "{}: unknown log category '{c}' (known: {})",
+                        self.api.name("fmi2SetDebugLogging"),
+                        known.join(", ")
+                    ));
                 }
             }
         }
@@ -372,21 +437,25 @@ impl Instance {
             return s;
         }
         if !start_time.is_finite() {
-            return self.error(&format!("fmi2SetupExperiment: start time {start_time} is not finite"));
+            return self.error(&format!("{}: start time {start_time} is not finite", self.api.name("fmi2SetupExperiment")));
         }
         if let Some(stop) = stop_time {
             if !(stop >= start_time) {
-                return self.error(&format!("fmi2SetupExperiment: stop time {stop} is before start time {start_time}"));
+                return self
+                    .error(&format!("{}: stop time {stop} is before start time {start_time}", self.api.name("fmi2SetupExperiment")));
             }
             if !stop.is_finite() {
-                return self.error(&format!("fmi2SetupExperiment: stop time {stop} is not finite (leave it undefined for no stop time)"));
+                return self.error(&format!(
+                    "{}: stop time {stop} is not finite (leave it undefined for no stop time)",
+                    self.api.name("fmi2SetupExperiment")
+                ));
             }
         }
         if let Some(t) = tolerance {
             if !(t.is_finite() && t > 0.0) {
-                return self.error(&format!("fmi2SetupExperiment: tolerance {} must be finite and > 0", show(t)));
+                return self.error(&format!("{}: tolerance {} must be finite and > 0", self.api.name("fmi2SetupExperiment"), show(t)));
             }
-            self.trace(|| format!("fmi2SetupExperiment: tolerance {t} ignored (fixed-step model)"));
+            self.trace(|| format!("{}: tolerance {t} ignored (fixed-step model)", self.api.name("fmi2SetupExperiment")));
         }
         self.start_time = start_time;
         self.stop_time = stop_time;
@@ -412,7 +481,7 @@ impl Instance {
             Ok(()) => {
                 if let Some(why) = self.non_finite_real() {
                     self.phase = Phase::Error;
-                    return self.error(&format!("fmi2ExitInitializationMode: {why}"));
+                    return self.error(&format!("{}: {why}", self.api.name("fmi2ExitInitializationMode")));
                 }
                 self.dirty = false;
                 self.time = self.start_time;
@@ -421,7 +490,7 @@ impl Instance {
             }
             Err(e) => {
                 self.phase = Phase::Error;
-                self.error(&format!("fmi2ExitInitializationMode: {e}"))
+                self.error(&format!("{}: {e}", self.api.name("fmi2ExitInitializationMode")))
             }
         }
     }
@@ -434,7 +503,7 @@ impl Instance {
         self.phase = Phase::Terminated;
         match self.model.terminate(&self.values) {
             Ok(()) => Status::Ok,
-            Err(e) => self.error(&format!("fmi2Terminate: {e}")),
+            Err(e) => self.error(&format!("{}: {e}", self.api.name("fmi2Terminate"))),
         }
     }
 
@@ -460,6 +529,7 @@ impl Instance {
     }
 
     fn resolve(&self, function: &str, vr: u32, base: BaseType) -> Result<usize, Status> {
+        let function = self.api.name(function);
         match self.index_of(base, vr) {
             Some(i) => Ok(i),
             None => {
@@ -476,6 +546,7 @@ impl Instance {
     }
 
     fn refresh(&mut self, function: &str) -> Result<(), Status> {
+        let function = self.api.name(function);
         if self.dirty && self.phase != Phase::Instantiated {
             // In initialization mode the outputs are initial unknowns: computed by the same
             // initialisation that leaving the mode runs, from the values set so far.
@@ -524,7 +595,8 @@ impl Instance {
             Status::Ok if all_finite(out) => Status::Ok,
             Status::Ok => match vrs.iter().find(|&&vr| !self.values.reals[vr as usize].is_finite()) {
                 Some(&vr) => self.error(&format!(
-                    "fmi2GetReal: '{}' is {}, not a finite number: the model call that computed it failed",
+                    "{}: '{}' is {}, not a finite number: the model call that computed it failed",
+                    self.api.name("fmi2GetReal"),
                     self.real_name(vr),
                     show(self.values.reals[vr as usize])
                 )),
@@ -548,6 +620,7 @@ impl Instance {
 
     /// Checks that every reference may be set now; sets nothing.
     fn check_settable(&self, function: &str, base: BaseType, vrs: &[u32]) -> Result<(), Status> {
+        let function = self.api.name(function);
         let which = if base == BaseType::Real { Function::SetReal } else { Function::SetOther };
         self.check_phase(function, which)?;
         let phase = match self.phase {
@@ -583,7 +656,7 @@ impl Instance {
             let (vr, v) = vrs.iter().zip(values).find(|(_, v)| !v.is_finite()).expect("one is not finite");
             let index = self.index_of(BaseType::Real, *vr).expect("checked above");
             let name = &self.model.description().variables[index].name;
-            return self.error(&format!("fmi2SetReal: {v} for '{name}' is not a finite number; nothing was set"));
+            return self.error(&format!("{}: {v} for '{name}' is not a finite number; nothing was set", self.api.name("fmi2SetReal")));
         }
         for (&vr, &v) in vrs.iter().zip(values) {
             self.values.reals[vr as usize] = v;
@@ -615,7 +688,8 @@ impl Instance {
                     let items: Vec<String> = declared_type.items.iter().map(|i| format!("{} = {}", i.name, i.value)).collect();
                     let name = &variables[index].name;
                     return self.error(&format!(
-                        "fmi2SetInteger: {value} is not an item of '{name}' (type {}: {}); nothing was set",
+                        "{}: {value} is not an item of '{name}' (type {}: {}); nothing was set",
+                        self.api.name("fmi2SetInteger"),
                         declared_type.name,
                         items.join(", ")
                     ));
@@ -647,7 +721,7 @@ impl Instance {
             match self.fixed_step {
                 Some(h) if (step - h).abs() > 1e-9 * h => {
                     return self.error(&format!(
-                        "fmi2DoStep: this FMU steps only at its first communication step size {h} s (canHandleVariableCommunicationStepSize is false), not {step} s"
+                        "{}: this FMU steps only at its first communication step size {h} s (canHandleVariableCommunicationStepSize is false), not {step} s", self.api.name("fmi2DoStep")
                     ));
                 }
                 Some(_) => {}
@@ -658,7 +732,7 @@ impl Instance {
             Ok(()) => {
                 if let Some(why) = self.non_finite_real() {
                     self.phase = Phase::Error;
-                    return self.error(&format!("fmi2DoStep at t = {current} s: {why}"));
+                    return self.error(&format!("{} at t = {current} s: {why}", self.api.name("fmi2DoStep")));
                 }
                 self.time = current + step;
                 self.dirty = false;
@@ -671,12 +745,16 @@ impl Instance {
                     self.phase = Phase::StepFailed;
                     self.terminated = kind == Discard::Terminate;
                     let what = if self.terminated { "the model asks to end the simulation" } else { "step discarded" };
-                    (self.log)(Status::Discard, "logStatusWarning", &format!("fmi2DoStep at t = {current} s: {what}: {e}"));
+                    (self.log)(
+                        Status::Discard,
+                        "logStatusWarning",
+                        &format!("{} at t = {current} s: {what}: {e}", self.api.name("fmi2DoStep")),
+                    );
                     Status::Discard
                 }
                 None => {
                     self.phase = Phase::Error;
-                    self.error(&format!("fmi2DoStep at t = {current} s: {e}"))
+                    self.error(&format!("{} at t = {current} s: {e}", self.api.name("fmi2DoStep")))
                 }
             },
         }
@@ -687,12 +765,17 @@ impl Instance {
     /// `fmi2SetupExperiment` (beyond a relative 1e-9, as the Reference-FMUs refuse it).
     fn check_step(&self, current: f64, step: f64) -> Result<(), Status> {
         if !(step.is_finite() && step > 0.0) {
-            return Err(self.error(&format!("fmi2DoStep: communication step size {} must be finite and > 0", show(step))));
+            return Err(self.error(&format!(
+                "{}: communication step size {} must be finite and > 0",
+                self.api.name("fmi2DoStep"),
+                show(step)
+            )));
         }
         let tolerance = 1e-9 * self.time.abs().max(1.0);
         if !current.is_finite() || (current - self.time).abs() > tolerance {
             return Err(self.error(&format!(
-                "fmi2DoStep: currentCommunicationPoint {} differs from the FMU's time {}",
+                "{}: currentCommunicationPoint {} differs from the FMU's time {}",
+                self.api.name("fmi2DoStep"),
                 show(current),
                 show(self.time)
             )));
@@ -700,7 +783,8 @@ impl Instance {
         let end = current + step;
         if !(end.is_finite() && end > current) {
             return Err(self.error(&format!(
-                "fmi2DoStep: a step of {} s from t = {} s ends at {}, not at a later time a double can hold",
+                "{}: a step of {} s from t = {} s ends at {}, not at a later time a double can hold",
+                self.api.name("fmi2DoStep"),
                 show(step),
                 show(current),
                 show(end)
@@ -709,7 +793,8 @@ impl Instance {
         if let Some(stop) = self.stop_time {
             if end > stop + 1e-9 * stop.abs().max(1.0) {
                 return Err(self.error(&format!(
-                    "fmi2DoStep: at t = {} s a step of {} s was requested, past the stop time {} s of fmi2SetupExperiment",
+                    "{}: at t = {} s a step of {} s was requested, past the stop time {} s set at initialization",
+                    self.api.name("fmi2DoStep"),
                     show(current),
                     show(step),
                     show(stop)
@@ -777,7 +862,7 @@ impl Instance {
         self.check_phase("fmi2GetFMUstate", Function::FmuState)?;
         if let Some(problem) = self.non_finite_real() {
             return Err(self.error(&format!(
-                "fmi2GetFMUstate: {problem}, left by a failed call; a state holding it could not be restored, so none is saved (restore an earlier state or reset)"
+                "{}: {problem}, left by a failed call; a state holding it could not be restored, so none is saved (restore an earlier state or reset)", self.api.name("fmi2GetFMUstate")
             )));
         }
         let mut model = Vec::new();
@@ -791,10 +876,10 @@ impl Instance {
             return s;
         }
         if let Err(e) = self.check_snapshot(snapshot) {
-            return self.error(&format!("fmi2SetFMUstate: {e}"));
+            return self.error(&format!("{}: {e}", self.api.name("fmi2SetFMUstate")));
         }
         if let Err(e) = self.model.load_state(&snapshot.values, &snapshot.model) {
-            return self.error(&format!("fmi2SetFMUstate: {e}"));
+            return self.error(&format!("{}: {e}", self.api.name("fmi2SetFMUstate")));
         }
         self.values = snapshot.values.clone();
         self.phase = snapshot.phase;
@@ -841,7 +926,7 @@ impl Instance {
     /// format version or of another model.
     pub fn deserialize(&self, bytes: &[u8]) -> Result<Snapshot, Status> {
         self.check_phase("fmi2DeSerializeFMUstate", Function::FmuState)?;
-        self.decode(bytes).map_err(|e| self.error(&format!("fmi2DeSerializeFMUstate: {e}")))
+        self.decode(bytes).map_err(|e| self.error(&format!("{}: {e}", self.api.name("fmi2DeSerializeFMUstate"))))
     }
 
     fn decode(&self, bytes: &[u8]) -> Result<Snapshot, StateError> {

@@ -1,0 +1,1211 @@
+//! The FMI 3.0 Co-Simulation C API over fmi2-export's [`Instance`]: pointer checks, value
+//! reference translation ([`Fmi3Variables`]), string conversion, and a `catch_unwind` around
+//! every entry point so no panic crosses into the host. The [`export_fmi3!`](crate::export_fmi3)
+//! macro emits the `extern "C"` symbols and calls these.
+//!
+//! The rules (state machine, settable variables, NaN refusal, FMU states) are the instance's,
+//! the same as behind the FMI 2.0 API; messages name the FMI 3.0 functions. Event mode,
+//! clocks, intermediate update, derivatives, Model Exchange and Scheduled Execution are not
+//! offered (`hasEventMode="false"`): their functions exist, log why and return `fmi3Error`
+//! (instantiation returns NULL).
+//!
+//! The functions are public for that macro and for tests; a model author calls none of them.
+
+use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::PathBuf;
+
+use fmi2_export::instance::{Api, Function, Instance, LogSink, Phase, Snapshot, Status};
+use fmi2_export::ModelFactory;
+
+use crate::description::{Fmi3Type, Fmi3Variables};
+
+/// `fmi3Instance`.
+pub type Fmi3Instance = *mut c_void;
+/// `fmi3FMUState`.
+pub type FmuState = *mut c_void;
+/// `fmi3Status` as the C API returns it (the values of [`Status`], without `Pending`).
+pub type RawStatus = c_int;
+/// `fmi3LogMessageCallback`: not variadic in FMI 3.0, the message is plain text.
+pub type LogMessage = unsafe extern "C" fn(*mut c_void, c_int, *const c_char, *const c_char);
+
+/// The host's logger and environment, callable from the instance.
+struct HostLogger {
+    logger: Option<LogMessage>,
+    environment: *mut c_void,
+}
+
+// SAFETY: an FMI instance may be used from any thread, one call at a time; the logger and its
+// environment belong to the host, which must accept calls from that thread.
+unsafe impl Send for HostLogger {}
+
+impl HostLogger {
+    fn log(&self, status: Status, category: &str, message: &str) {
+        let Some(logger) = self.logger else { return };
+        let text = CString::new(message.replace('\0', "")).expect("NULs removed");
+        let category = CString::new(category.replace('\0', "")).expect("NULs removed");
+        // SAFETY: the logger was given by the host for this purpose; both strings are valid C
+        // strings that outlive the call.
+        unsafe { logger(self.environment, status as c_int, category.as_ptr(), text.as_ptr()) }
+    }
+}
+
+/// What an `fmi3Instance` points to.
+pub struct Wrapper {
+    instance: Instance,
+    variables: Fmi3Variables,
+    /// The FMI 2.0 value references of the current call (kept to avoid an allocation per call).
+    scratch: Vec<u32>,
+    /// Keeps the strings returned by `fmi3GetString` alive until the next call.
+    strings: Vec<CString>,
+}
+
+impl Wrapper {
+    /// Translates `vrs` of type `wanted` into the instance's value references in `scratch`; an
+    /// unknown reference, one of another type or a value count other than one per reference
+    /// (all variables are scalars) is refused with a log entry.
+    fn translate(&mut self, function: &str, wanted: Fmi3Type, vrs: &[u32], n_values: usize) -> Result<(), Status> {
+        if n_values != vrs.len() {
+            return Err(self.instance.error(&format!(
+                "{function}: nValues = {n_values} for nValueReferences = {}: every variable of this FMU is a scalar, so they must be equal",
+                vrs.len()
+            )));
+        }
+        self.scratch.clear();
+        for &vr in vrs {
+            match self.variables.get(vr) {
+                Some((t, fmi2_vr)) if t == wanted => self.scratch.push(fmi2_vr),
+                Some((t, _)) => {
+                    let name = &self.instance.description().variables[vr as usize].name;
+                    return Err(self.instance.error(&format!(
+                        "{function}: value reference {vr} ('{name}') is a {} variable, not {}{}",
+                        t.name(),
+                        wanted.name(),
+                        if t == Fmi3Type::Enumeration { " (read and set enumerations with fmi3GetInt64/fmi3SetInt64)" } else { "" }
+                    )));
+                }
+                None => return Err(self.instance.error(&format!("{function}: unknown value reference {vr}"))),
+            }
+        }
+        Ok(())
+    }
+}
+
+/// SAFETY (for all functions below): the host passes pointers as the FMI 3.0 standard
+/// describes them; arrays have the lengths given with them.
+unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
+    if p.is_null() {
+        None
+    } else {
+        unsafe { CStr::from_ptr(p) }.to_str().ok()
+    }
+}
+
+unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        Some(&[])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(unsafe { std::slice::from_raw_parts(p, n) })
+    }
+}
+
+unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        Some(&mut [])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
+    }
+}
+
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// Runs `body` on the instance behind `c`, turning a panic into `fmi3Fatal`.
+unsafe fn with(c: Fmi3Instance, name: &str, body: impl FnOnce(&mut Wrapper) -> Status) -> RawStatus {
+    if c.is_null() {
+        return Status::Error as c_int;
+    }
+    // SAFETY: a non-null instance is one we returned from fmi3InstantiateCoSimulation.
+    let wrapper = unsafe { &mut *(c as *mut Wrapper) };
+    if wrapper.instance.phase() == Phase::Fatal {
+        return Status::Fatal as c_int;
+    }
+    wrapper.instance.trace(|| name.to_string());
+    match catch_unwind(AssertUnwindSafe(|| body(&mut *wrapper))) {
+        Ok(s) => s as c_int,
+        Err(panic) => {
+            let why = panic_message(&*panic);
+            wrapper.instance.error(&format!("{name}: internal error ({why}); the instance can only be freed"));
+            wrapper.instance.set_fatal();
+            Status::Fatal as c_int
+        }
+    }
+}
+
+fn null_argument(w: &Wrapper, function: &str, what: &str) -> Status {
+    w.instance.error(&format!("{function}: {what} is NULL"))
+}
+
+/// `fmi3InstantiateCoSimulation`: NULL, after logging why (when a logger was given), for an
+/// empty name, a wrong instantiation token, event mode asked for (this FMU has none), a
+/// resource path that is not UTF-8, or a factory that fails. The factory gets the resource
+/// folder (which may not exist), or `None` when the host passed none.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+#[allow(clippy::too_many_arguments)] // mirrors the C signature
+pub unsafe fn instantiate_co_simulation(
+    factory: ModelFactory,
+    instance_name: *const c_char,
+    instantiation_token: *const c_char,
+    resource_path: *const c_char,
+    _visible: bool,
+    logging_on: bool,
+    event_mode_used: bool,
+    _early_return_allowed: bool,
+    _required_intermediate_variables: *const u32,
+    _n_required_intermediate_variables: usize,
+    instance_environment: *mut c_void,
+    log_message: Option<LogMessage>,
+) -> Fmi3Instance {
+    let host = || HostLogger { logger: log_message, environment: instance_environment };
+    let fail = |message: String| {
+        host().log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {message}"));
+        std::ptr::null_mut()
+    };
+    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Fmi3Instance, String> {
+        let name = unsafe { str_arg(instance_name) }.unwrap_or("");
+        if name.is_empty() {
+            return Err("the instance name is NULL, empty or not UTF-8".into());
+        }
+        if event_mode_used {
+            return Err("eventModeUsed is true, but this FMU has no event mode (hasEventMode=\"false\")".into());
+        }
+        let token = unsafe { str_arg(instantiation_token) }.ok_or("the instantiation token is NULL or not UTF-8")?;
+        let resources = match unsafe { str_arg(resource_path) } {
+            Some(path) => Some(PathBuf::from(path)),
+            None if resource_path.is_null() => None,
+            None => return Err("the resource path is not UTF-8".into()),
+        };
+        let model = factory(resources.as_deref()).map_err(|e| e.to_string())?;
+        let variables = Fmi3Variables::new(model.description());
+        let sink_host = host();
+        let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
+        let instance = Instance::new(name, token, model, sink, logging_on)
+            .map_err(|e| e.to_string().replace("GUID", "instantiation token"))?
+            .with_api(Api::Fmi3);
+        Ok(Box::into_raw(Box::new(Wrapper { instance, variables, scratch: Vec::new(), strings: Vec::new() })) as Fmi3Instance)
+    }));
+    match result {
+        Ok(Ok(c)) => c,
+        Ok(Err(message)) => fail(message),
+        Err(panic) => fail(format!("internal error ({})", panic_message(&*panic))),
+    }
+}
+
+/// `fmi3InstantiateModelExchange` and `fmi3InstantiateScheduledExecution`: this FMU offers
+/// Co-Simulation only; logs why and returns NULL.
+///
+/// # Safety
+/// `log_message` is NULL or the host's logger for `instance_environment`.
+pub unsafe fn instantiate_other(function: &str, instance_environment: *mut c_void, log_message: Option<LogMessage>) -> Fmi3Instance {
+    let host = HostLogger { logger: log_message, environment: instance_environment };
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        host.log(Status::Error, "logStatusError", &format!("{function}: this FMU supports only Co-Simulation"))
+    }));
+    std::ptr::null_mut()
+}
+
+/// `fmi3FreeInstance`.
+///
+/// # Safety
+/// `c` is NULL or an instance from [`instantiate_co_simulation`] not freed before.
+pub unsafe fn free_instance(c: Fmi3Instance) {
+    if !c.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) })));
+    }
+}
+
+/// `fmi3SetDebugLogging`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn set_debug_logging(c: Fmi3Instance, on: bool, n: usize, categories: *const *const c_char) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SetDebugLogging", |w| {
+            let Some(ptrs) = slice(categories, n) else {
+                return null_argument(w, "fmi3SetDebugLogging", "categories");
+            };
+            let mut names = Vec::with_capacity(n);
+            for &p in ptrs {
+                match str_arg(p) {
+                    Some(s) => names.push(s),
+                    None => return w.instance.error("fmi3SetDebugLogging: a category is NULL or not UTF-8"),
+                }
+            }
+            w.instance.set_debug_logging(on, &names)
+        })
+    }
+}
+
+/// `fmi3EnterInitializationMode`: the experiment's tolerance, start and stop time, then
+/// initialization mode.
+///
+/// # Safety
+/// `c` as in the FMI 3.0 standard.
+pub unsafe fn enter_initialization_mode(
+    c: Fmi3Instance,
+    tolerance_defined: bool,
+    tolerance: f64,
+    start_time: f64,
+    stop_time_defined: bool,
+    stop_time: f64,
+) -> RawStatus {
+    unsafe {
+        with(c, "fmi3EnterInitializationMode", |w| {
+            let s = w.instance.setup_experiment(tolerance_defined.then_some(tolerance), start_time, stop_time_defined.then_some(stop_time));
+            if s != Status::Ok {
+                return s;
+            }
+            w.instance.enter_initialization_mode()
+        })
+    }
+}
+
+macro_rules! simple {
+    ($($(#[$doc:meta])* $fn_name:ident => $method:ident, $c_name:literal;)*) => {$(
+        $(#[$doc])*
+        ///
+        /// # Safety
+        /// `c` as in the FMI 3.0 standard.
+        pub unsafe fn $fn_name(c: Fmi3Instance) -> RawStatus {
+            unsafe { with(c, $c_name, |w| w.instance.$method()) }
+        }
+    )*};
+}
+
+simple! {
+    /// `fmi3ExitInitializationMode`: the model reads its parameters; the instance is in step mode.
+    exit_initialization_mode => exit_initialization_mode, "fmi3ExitInitializationMode";
+    /// `fmi3Terminate`.
+    terminate => terminate, "fmi3Terminate";
+    /// `fmi3Reset`.
+    reset => reset, "fmi3Reset";
+}
+
+/// `fmi3GetFloat64`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn get_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut f64, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3GetFloat64", |w| match (slice(vr, n), slice_mut(values, n_values)) {
+            (Some(vr), Some(out)) => {
+                if let Err(s) = w.translate("fmi3GetFloat64", Fmi3Type::Float64, vr, out.len()) {
+                    return s;
+                }
+                w.instance.get_real(&w.scratch, out)
+            }
+            _ => null_argument(w, "fmi3GetFloat64", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3SetFloat64`: NaN and infinities are refused, nothing set.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn set_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *const f64, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SetFloat64", |w| match (slice(vr, n), slice(values, n_values)) {
+            (Some(vr), Some(v)) => {
+                if let Err(s) = w.translate("fmi3SetFloat64", Fmi3Type::Float64, vr, v.len()) {
+                    return s;
+                }
+                w.instance.set_real(&w.scratch, v)
+            }
+            _ => null_argument(w, "fmi3SetFloat64", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3GetInt32`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn get_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut i32, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3GetInt32", |w| match (slice(vr, n), slice_mut(values, n_values)) {
+            (Some(vr), Some(out)) => {
+                if let Err(s) = w.translate("fmi3GetInt32", Fmi3Type::Int32, vr, out.len()) {
+                    return s;
+                }
+                w.instance.get_integer(&w.scratch, out)
+            }
+            _ => null_argument(w, "fmi3GetInt32", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3SetInt32`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn set_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *const i32, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SetInt32", |w| match (slice(vr, n), slice(values, n_values)) {
+            (Some(vr), Some(v)) => {
+                if let Err(s) = w.translate("fmi3SetInt32", Fmi3Type::Int32, vr, v.len()) {
+                    return s;
+                }
+                w.instance.set_integer(&w.scratch, v)
+            }
+            _ => null_argument(w, "fmi3SetInt32", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3GetInt64`: the enumeration variables.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn get_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut i64, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3GetInt64", |w| match (slice(vr, n), slice_mut(values, n_values)) {
+            (Some(vr), Some(out)) => {
+                if let Err(s) = w.translate("fmi3GetInt64", Fmi3Type::Enumeration, vr, out.len()) {
+                    return s;
+                }
+                let mut narrow = vec![0i32; out.len()];
+                let s = w.instance.get_integer(&w.scratch, &mut narrow);
+                if s == Status::Ok {
+                    for (o, v) in out.iter_mut().zip(narrow) {
+                        *o = i64::from(v);
+                    }
+                }
+                s
+            }
+            _ => null_argument(w, "fmi3GetInt64", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3SetInt64`: the enumeration variables, each only to one of its type's items.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn set_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *const i64, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SetInt64", |w| match (slice(vr, n), slice(values, n_values)) {
+            (Some(vr), Some(v)) => {
+                if let Err(s) = w.translate("fmi3SetInt64", Fmi3Type::Enumeration, vr, v.len()) {
+                    return s;
+                }
+                let mut narrow = Vec::with_capacity(v.len());
+                for (&x, &r) in v.iter().zip(vr) {
+                    match i32::try_from(x) {
+                        Ok(x) => narrow.push(x),
+                        Err(_) => {
+                            let name = &w.instance.description().variables[r as usize].name;
+                            return w.instance.error(&format!("fmi3SetInt64: {x} is not an item of '{name}'; nothing was set"));
+                        }
+                    }
+                }
+                w.instance.set_integer(&w.scratch, &narrow)
+            }
+            _ => null_argument(w, "fmi3SetInt64", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3GetBoolean`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn get_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut bool, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3GetBoolean", |w| match (slice(vr, n), slice_mut(values, n_values)) {
+            (Some(vr), Some(out)) => {
+                if let Err(s) = w.translate("fmi3GetBoolean", Fmi3Type::Boolean, vr, out.len()) {
+                    return s;
+                }
+                w.instance.get_boolean(&w.scratch, out)
+            }
+            _ => null_argument(w, "fmi3GetBoolean", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3SetBoolean`. Each value is read as a byte (any non-zero byte is true), so a host's
+/// `bool` outside 0 and 1 cannot make an invalid Rust `bool`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn set_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *const u8, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SetBoolean", |w| match (slice(vr, n), slice(values, n_values)) {
+            (Some(vr), Some(v)) => {
+                if let Err(s) = w.translate("fmi3SetBoolean", Fmi3Type::Boolean, vr, v.len()) {
+                    return s;
+                }
+                let b: Vec<bool> = v.iter().map(|&x| x != 0).collect();
+                w.instance.set_boolean(&w.scratch, &b)
+            }
+            _ => null_argument(w, "fmi3SetBoolean", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3GetString`: the strings stay valid until the next call on the instance.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn get_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut *const c_char, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3GetString", |w| match (slice(vr, n), slice_mut(values, n_values)) {
+            (Some(vr), Some(out)) => {
+                if let Err(s) = w.translate("fmi3GetString", Fmi3Type::String, vr, out.len()) {
+                    return s;
+                }
+                let mut s = vec![String::new(); out.len()];
+                let status = w.instance.get_string(&w.scratch, &mut s);
+                if status == Status::Ok {
+                    w.strings = s.into_iter().map(|x| CString::new(x.replace('\0', "")).expect("NULs removed")).collect();
+                    for (o, cs) in out.iter_mut().zip(&w.strings) {
+                        *o = cs.as_ptr();
+                    }
+                }
+                status
+            }
+            _ => null_argument(w, "fmi3GetString", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// `fmi3SetString`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn set_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *const *const c_char, n_values: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SetString", |w| match (slice(vr, n), slice(values, n_values)) {
+            (Some(vr), Some(v)) => {
+                if let Err(s) = w.translate("fmi3SetString", Fmi3Type::String, vr, v.len()) {
+                    return s;
+                }
+                let mut strings = Vec::with_capacity(v.len());
+                for &p in v {
+                    match str_arg(p) {
+                        Some(s) => strings.push(s.to_owned()),
+                        None => return w.instance.error("fmi3SetString: a value is NULL or not UTF-8; nothing was set"),
+                    }
+                }
+                w.instance.set_string(&w.scratch, &strings)
+            }
+            _ => null_argument(w, "fmi3SetString", "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// The getters and setters of the types this FMU has no variables of (`fmi3GetFloat32`,
+/// `fmi3SetUInt8`, `fmi3GetBinary`, `fmi3GetClock`, …): `fmi3OK` for no value references in a
+/// state that allows the call, else `fmi3Error` naming the first reference and what it is.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn no_such_type(c: Fmi3Instance, function: &str, type_name: &str, setter: bool, vr: *const u32, n: usize) -> RawStatus {
+    unsafe {
+        with(c, function, |w| {
+            let phase = if setter { Function::SetOther } else { Function::GetValues };
+            if let Err(s) = w.instance.check_phase(function, phase) {
+                return s;
+            }
+            let Some(vr) = slice(vr, n) else { return null_argument(w, function, "valueReferences[]") };
+            match vr.first() {
+                None => Status::Ok,
+                Some(&r) => match w.variables.get(r) {
+                    Some((t, _)) => {
+                        let name = &w.instance.description().variables[r as usize].name;
+                        w.instance.error(&format!("{function}: value reference {r} ('{name}') is a {} variable, not {type_name}", t.name()))
+                    }
+                    None => w.instance.error(&format!("{function}: unknown value reference {r} (this FMU has no {type_name} variables)")),
+                },
+            }
+        })
+    }
+}
+
+/// `fmi3GetFMUState`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn get_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi3GetFMUState", |w| {
+            if state.is_null() {
+                return null_argument(w, "fmi3GetFMUState", "FMUState");
+            }
+            match w.instance.get_state() {
+                Ok(snap) => {
+                    store_state(state, snap);
+                    Status::Ok
+                }
+                Err(s) => s,
+            }
+        })
+    }
+}
+
+unsafe fn store_state(state: *mut FmuState, snap: Snapshot) {
+    unsafe {
+        if (*state).is_null() {
+            *state = Box::into_raw(Box::new(snap)) as FmuState;
+        } else {
+            *(*state as *mut Snapshot) = snap;
+        }
+    }
+}
+
+/// `fmi3SetFMUState`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard: `state` from this FMU's `fmi3GetFMUState` or
+/// `fmi3DeserializeFMUState`.
+pub unsafe fn set_fmu_state(c: Fmi3Instance, state: FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SetFMUState", |w| match (state as *const Snapshot).as_ref() {
+            Some(snap) => w.instance.set_state(snap),
+            None => null_argument(w, "fmi3SetFMUState", "FMUState"),
+        })
+    }
+}
+
+/// `fmi3FreeFMUState`: frees `*state` and sets it to NULL.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn free_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi3FreeFMUState", |w| {
+            if let Err(s) = w.instance.check_phase("fmi3FreeFMUState", Function::FmuState) {
+                return s;
+            }
+            if !state.is_null() && !(*state).is_null() {
+                drop(Box::from_raw(*state as *mut Snapshot));
+                *state = std::ptr::null_mut();
+            }
+            Status::Ok
+        })
+    }
+}
+
+/// `fmi3SerializedFMUStateSize`.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn serialized_fmu_state_size(c: Fmi3Instance, state: FmuState, size: *mut usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SerializedFMUStateSize", |w| match ((state as *const Snapshot).as_ref(), size.is_null()) {
+            (Some(snap), false) => match w.instance.serialize(snap) {
+                Ok(bytes) => {
+                    *size = bytes.len();
+                    Status::Ok
+                }
+                Err(s) => s,
+            },
+            _ => null_argument(w, "fmi3SerializedFMUStateSize", "FMUState or size"),
+        })
+    }
+}
+
+/// `fmi3SerializeFMUState`: `size` must be what `fmi3SerializedFMUStateSize` said.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn serialize_fmu_state(c: Fmi3Instance, state: FmuState, out: *mut u8, size: usize) -> RawStatus {
+    unsafe {
+        with(c, "fmi3SerializeFMUState", |w| match ((state as *const Snapshot).as_ref(), slice_mut(out, size)) {
+            (Some(snap), Some(out)) => match w.instance.serialize(snap) {
+                Ok(bytes) if bytes.len() == out.len() => {
+                    out.copy_from_slice(&bytes);
+                    Status::Ok
+                }
+                Ok(bytes) => w.instance.error(&format!("fmi3SerializeFMUState: size {size} given, the state needs {} bytes", bytes.len())),
+                Err(s) => s,
+            },
+            _ => null_argument(w, "fmi3SerializeFMUState", "FMUState or serializedState"),
+        })
+    }
+}
+
+/// `fmi3DeserializeFMUState`: a truncated, altered or foreign buffer is refused.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+pub unsafe fn deserialize_fmu_state(c: Fmi3Instance, bytes: *const u8, size: usize, state: *mut FmuState) -> RawStatus {
+    unsafe {
+        with(c, "fmi3DeserializeFMUState", |w| match (slice(bytes, size), state.is_null()) {
+            (Some(bytes), false) => match w.instance.deserialize(bytes) {
+                Ok(snap) => {
+                    store_state(state, snap);
+                    Status::Ok
+                }
+                Err(s) => s,
+            },
+            _ => null_argument(w, "fmi3DeserializeFMUState", "serializedState or FMUState"),
+        })
+    }
+}
+
+/// `fmi3DoStep` from `current` [s] by `step` [s]. No event handling and no early return are
+/// ever needed; `terminateSimulation` is true when the model asked to end the simulation
+/// (the step returns `fmi3Discard`); `lastSuccessfulTime` is the instance's time after the call.
+///
+/// # Safety
+/// Arguments as in the FMI 3.0 standard.
+#[allow(clippy::too_many_arguments)] // mirrors the C signature
+pub unsafe fn do_step(
+    c: Fmi3Instance,
+    current: f64,
+    step: f64,
+    _no_set_fmu_state_prior: bool,
+    event_handling_needed: *mut bool,
+    terminate_simulation: *mut bool,
+    early_return: *mut bool,
+    last_successful_time: *mut f64,
+) -> RawStatus {
+    unsafe {
+        with(c, "fmi3DoStep", |w| {
+            if event_handling_needed.is_null() || terminate_simulation.is_null() || early_return.is_null() || last_successful_time.is_null()
+            {
+                return null_argument(w, "fmi3DoStep", "eventHandlingNeeded, terminateSimulation, earlyReturn or lastSuccessfulTime");
+            }
+            let s = w.instance.do_step(current, step);
+            *event_handling_needed = false;
+            *early_return = false;
+            *terminate_simulation = s == Status::Discard && w.instance.terminated_status().unwrap_or(false);
+            *last_successful_time = w.instance.time();
+            s
+        })
+    }
+}
+
+/// A function this FMU does not offer: logs `why` and returns `fmi3Error`.
+///
+/// # Safety
+/// `c` as in the FMI 3.0 standard.
+pub unsafe fn unsupported(c: Fmi3Instance, name: &str, why: &str) -> RawStatus {
+    unsafe { with(c, name, |w| w.instance.error(&format!("{name}: not supported: {why}"))) }
+}
+
+/// The reason logged by the functions of event mode and clocks.
+pub const NO_EVENT_MODE: &str = "this FMU has no event mode and no clocks (hasEventMode=\"false\")";
+/// The reason logged by the functions of Model Exchange.
+pub const CO_SIMULATION_ONLY: &str = "this FMU supports only Co-Simulation";
+
+/// Emits every `fmi3*` function of the FMI 3.0 C API as an `extern "C"` symbol serving the
+/// models `factory` makes (a [`ModelFactory`](fmi2_export::ModelFactory)): Co-Simulation
+/// through the shared instance; the functions of the other interfaces log why they are not
+/// offered and return `fmi3Error` (or NULL). A library may also carry `export_fmi2!`'s symbols:
+/// the names do not clash, so one binary can serve an FMU's FMI 2.0 and FMI 3.0 twins.
+#[macro_export]
+macro_rules! export_fmi3 {
+    ($factory:path) => {
+        #[doc(hidden)]
+        const __FMI3_EXPORT_FACTORY: $crate::fmi2_export::ModelFactory = $factory;
+
+        #[doc(hidden)]
+        #[allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
+        mod fmi3_exports {
+            use std::ffi::{c_char, c_int, c_void};
+            use $crate::abi::{self, Fmi3Instance, FmuState, LogMessage, RawStatus, CO_SIMULATION_ONLY, NO_EVENT_MODE};
+
+            #[no_mangle]
+            pub extern "C" fn fmi3GetVersion() -> *const c_char {
+                c"3.0".as_ptr()
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetDebugLogging(c: Fmi3Instance, on: bool, n: usize, cats: *const *const c_char) -> RawStatus {
+                unsafe { abi::set_debug_logging(c, on, n, cats) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3InstantiateModelExchange(
+                _name: *const c_char,
+                _token: *const c_char,
+                _resources: *const c_char,
+                _visible: bool,
+                _logging_on: bool,
+                env: *mut c_void,
+                log: Option<LogMessage>,
+            ) -> Fmi3Instance {
+                unsafe { abi::instantiate_other("fmi3InstantiateModelExchange", env, log) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
+                name: *const c_char,
+                token: *const c_char,
+                resources: *const c_char,
+                visible: bool,
+                logging_on: bool,
+                event_mode_used: bool,
+                early_return_allowed: bool,
+                required: *const u32,
+                n_required: usize,
+                env: *mut c_void,
+                log: Option<LogMessage>,
+                _intermediate_update: *const c_void,
+            ) -> Fmi3Instance {
+                unsafe {
+                    abi::instantiate_co_simulation(
+                        super::__FMI3_EXPORT_FACTORY,
+                        name,
+                        token,
+                        resources,
+                        visible,
+                        logging_on,
+                        event_mode_used,
+                        early_return_allowed,
+                        required,
+                        n_required,
+                        env,
+                        log,
+                    )
+                }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
+                _name: *const c_char,
+                _token: *const c_char,
+                _resources: *const c_char,
+                _visible: bool,
+                _logging_on: bool,
+                env: *mut c_void,
+                log: Option<LogMessage>,
+                _clock_update: *const c_void,
+                _lock: *const c_void,
+                _unlock: *const c_void,
+            ) -> Fmi3Instance {
+                unsafe { abi::instantiate_other("fmi3InstantiateScheduledExecution", env, log) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
+                unsafe { abi::free_instance(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3EnterInitializationMode(
+                c: Fmi3Instance,
+                td: bool,
+                tol: f64,
+                start: f64,
+                sd: bool,
+                stop: f64,
+            ) -> RawStatus {
+                unsafe { abi::enter_initialization_mode(c, td, tol, start, sd, stop) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3ExitInitializationMode(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::exit_initialization_mode(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3EnterEventMode(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3EnterEventMode", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3Terminate(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::terminate(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3Reset(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::reset(c) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetFloat64(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut f64, nv: usize) -> RawStatus {
+                unsafe { abi::get_float64(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetFloat64(c: Fmi3Instance, vr: *const u32, n: usize, v: *const f64, nv: usize) -> RawStatus {
+                unsafe { abi::set_float64(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetInt32(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut i32, nv: usize) -> RawStatus {
+                unsafe { abi::get_int32(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetInt32(c: Fmi3Instance, vr: *const u32, n: usize, v: *const i32, nv: usize) -> RawStatus {
+                unsafe { abi::set_int32(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetInt64(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut i64, nv: usize) -> RawStatus {
+                unsafe { abi::get_int64(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetInt64(c: Fmi3Instance, vr: *const u32, n: usize, v: *const i64, nv: usize) -> RawStatus {
+                unsafe { abi::set_int64(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetBoolean(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut bool, nv: usize) -> RawStatus {
+                unsafe { abi::get_boolean(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetBoolean(c: Fmi3Instance, vr: *const u32, n: usize, v: *const u8, nv: usize) -> RawStatus {
+                unsafe { abi::set_boolean(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetString(
+                c: Fmi3Instance,
+                vr: *const u32,
+                n: usize,
+                v: *mut *const c_char,
+                nv: usize,
+            ) -> RawStatus {
+                unsafe { abi::get_string(c, vr, n, v, nv) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetString(
+                c: Fmi3Instance,
+                vr: *const u32,
+                n: usize,
+                v: *const *const c_char,
+                nv: usize,
+            ) -> RawStatus {
+                unsafe { abi::set_string(c, vr, n, v, nv) }
+            }
+            $crate::__fmi3_no_such_type! {
+                fmi3GetFloat32 "Float32" get f32;
+                fmi3GetInt8 "Int8" get i8;
+                fmi3GetUInt8 "UInt8" get u8;
+                fmi3GetInt16 "Int16" get i16;
+                fmi3GetUInt16 "UInt16" get u16;
+                fmi3GetUInt32 "UInt32" get u32;
+                fmi3GetUInt64 "UInt64" get u64;
+                fmi3SetFloat32 "Float32" set f32;
+                fmi3SetInt8 "Int8" set i8;
+                fmi3SetUInt8 "UInt8" set u8;
+                fmi3SetInt16 "Int16" set i16;
+                fmi3SetUInt16 "UInt16" set u16;
+                fmi3SetUInt32 "UInt32" set u32;
+                fmi3SetUInt64 "UInt64" set u64;
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetBinary(
+                c: Fmi3Instance,
+                vr: *const u32,
+                n: usize,
+                _sizes: *mut usize,
+                _v: *mut *const u8,
+                _nv: usize,
+            ) -> RawStatus {
+                unsafe { abi::no_such_type(c, "fmi3GetBinary", "Binary", false, vr, n) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetBinary(
+                c: Fmi3Instance,
+                vr: *const u32,
+                n: usize,
+                _sizes: *const usize,
+                _v: *const *const u8,
+                _nv: usize,
+            ) -> RawStatus {
+                unsafe { abi::no_such_type(c, "fmi3SetBinary", "Binary", true, vr, n) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetClock(c: Fmi3Instance, vr: *const u32, n: usize, _v: *mut bool) -> RawStatus {
+                unsafe { abi::no_such_type(c, "fmi3GetClock", "Clock", false, vr, n) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetClock(c: Fmi3Instance, vr: *const u32, n: usize, _v: *const bool) -> RawStatus {
+                unsafe { abi::no_such_type(c, "fmi3SetClock", "Clock", true, vr, n) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetNumberOfVariableDependencies(c: Fmi3Instance, _vr: u32, _n: *mut usize) -> RawStatus {
+                unsafe {
+                    abi::unsupported(
+                        c,
+                        "fmi3GetNumberOfVariableDependencies",
+                        "the dependencies are in modelDescription.xml (providesPerElementDependencies=\"false\")",
+                    )
+                }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetVariableDependencies(
+                c: Fmi3Instance,
+                _dependent: u32,
+                _element_dependent: *mut usize,
+                _independents: *mut u32,
+                _element_independents: *mut usize,
+                _kinds: *mut c_int,
+                _n: usize,
+            ) -> RawStatus {
+                unsafe {
+                    abi::unsupported(
+                        c,
+                        "fmi3GetVariableDependencies",
+                        "the dependencies are in modelDescription.xml (providesPerElementDependencies=\"false\")",
+                    )
+                }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetFMUState(c: Fmi3Instance, s: *mut FmuState) -> RawStatus {
+                unsafe { abi::get_fmu_state(c, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetFMUState(c: Fmi3Instance, s: FmuState) -> RawStatus {
+                unsafe { abi::set_fmu_state(c, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3FreeFMUState(c: Fmi3Instance, s: *mut FmuState) -> RawStatus {
+                unsafe { abi::free_fmu_state(c, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SerializedFMUStateSize(c: Fmi3Instance, s: FmuState, size: *mut usize) -> RawStatus {
+                unsafe { abi::serialized_fmu_state_size(c, s, size) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SerializeFMUState(c: Fmi3Instance, s: FmuState, out: *mut u8, size: usize) -> RawStatus {
+                unsafe { abi::serialize_fmu_state(c, s, out, size) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3DeserializeFMUState(
+                c: Fmi3Instance,
+                bytes: *const u8,
+                size: usize,
+                s: *mut FmuState,
+            ) -> RawStatus {
+                unsafe { abi::deserialize_fmu_state(c, bytes, size, s) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
+                c: Fmi3Instance,
+                _unknowns: *const u32,
+                _n_unknowns: usize,
+                _knowns: *const u32,
+                _n_knowns: usize,
+                _seed: *const f64,
+                _n_seed: usize,
+                _sensitivity: *mut f64,
+                _n_sensitivity: usize,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetDirectionalDerivative", "providesDirectionalDerivatives is false") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetAdjointDerivative(
+                c: Fmi3Instance,
+                _unknowns: *const u32,
+                _n_unknowns: usize,
+                _knowns: *const u32,
+                _n_knowns: usize,
+                _seed: *const f64,
+                _n_seed: usize,
+                _sensitivity: *mut f64,
+                _n_sensitivity: usize,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetAdjointDerivative", "providesAdjointDerivatives is false") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3EnterConfigurationMode(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3EnterConfigurationMode", "this FMU has no structural parameters") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3ExitConfigurationMode(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3ExitConfigurationMode", "this FMU has no structural parameters") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetIntervalDecimal(
+                c: Fmi3Instance,
+                _vr: *const u32,
+                _n: usize,
+                _i: *mut f64,
+                _q: *mut c_int,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetIntervalDecimal", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetIntervalFraction(
+                c: Fmi3Instance,
+                _vr: *const u32,
+                _n: usize,
+                _counters: *mut u64,
+                _r: *mut u64,
+                _q: *mut c_int,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetIntervalFraction", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetShiftDecimal(c: Fmi3Instance, _vr: *const u32, _n: usize, _s: *mut f64) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetShiftDecimal", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetShiftFraction(
+                c: Fmi3Instance,
+                _vr: *const u32,
+                _n: usize,
+                _counters: *mut u64,
+                _r: *mut u64,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetShiftFraction", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetIntervalDecimal(c: Fmi3Instance, _vr: *const u32, _n: usize, _i: *const f64) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3SetIntervalDecimal", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetIntervalFraction(
+                c: Fmi3Instance,
+                _vr: *const u32,
+                _n: usize,
+                _counters: *const u64,
+                _r: *const u64,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3SetIntervalFraction", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetShiftDecimal(c: Fmi3Instance, _vr: *const u32, _n: usize, _s: *const f64) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3SetShiftDecimal", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetShiftFraction(
+                c: Fmi3Instance,
+                _vr: *const u32,
+                _n: usize,
+                _counters: *const u64,
+                _r: *const u64,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3SetShiftFraction", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3EvaluateDiscreteStates(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3EvaluateDiscreteStates", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
+                c: Fmi3Instance,
+                _discrete_states_need_update: *mut bool,
+                _terminate: *mut bool,
+                _nominals_changed: *mut bool,
+                _values_changed: *mut bool,
+                _next_event_time_defined: *mut bool,
+                _next_event_time: *mut f64,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3UpdateDiscreteStates", NO_EVENT_MODE) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3EnterContinuousTimeMode", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
+                c: Fmi3Instance,
+                _no_prior: bool,
+                _enter_event_mode: *mut bool,
+                _terminate: *mut bool,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3CompletedIntegratorStep", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetTime(c: Fmi3Instance, _time: f64) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3SetTime", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3SetContinuousStates(c: Fmi3Instance, _x: *const f64, _n: usize) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3SetContinuousStates", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(c: Fmi3Instance, _dx: *mut f64, _n: usize) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetContinuousStateDerivatives", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetEventIndicators(c: Fmi3Instance, _z: *mut f64, _n: usize) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetEventIndicators", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetContinuousStates(c: Fmi3Instance, _x: *mut f64, _n: usize) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetContinuousStates", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(c: Fmi3Instance, _x: *mut f64, _n: usize) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetNominalsOfContinuousStates", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(c: Fmi3Instance, _n: *mut usize) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetNumberOfEventIndicators", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(c: Fmi3Instance, _n: *mut usize) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetNumberOfContinuousStates", CO_SIMULATION_ONLY) }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3EnterStepMode(c: Fmi3Instance) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3EnterStepMode", "event mode is not used: fmi3ExitInitializationMode enters step mode") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3GetOutputDerivatives(
+                c: Fmi3Instance,
+                _vr: *const u32,
+                _n: usize,
+                _orders: *const i32,
+                _v: *mut f64,
+                _nv: usize,
+            ) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3GetOutputDerivatives", "maxOutputDerivativeOrder is 0") }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3DoStep(
+                c: Fmi3Instance,
+                current: f64,
+                step: f64,
+                no_prior: bool,
+                event_handling_needed: *mut bool,
+                terminate_simulation: *mut bool,
+                early_return: *mut bool,
+                last_successful_time: *mut f64,
+            ) -> RawStatus {
+                unsafe {
+                    abi::do_step(
+                        c,
+                        current,
+                        step,
+                        no_prior,
+                        event_handling_needed,
+                        terminate_simulation,
+                        early_return,
+                        last_successful_time,
+                    )
+                }
+            }
+            #[no_mangle]
+            pub unsafe extern "C" fn fmi3ActivateModelPartition(c: Fmi3Instance, _clock: u32, _time: f64) -> RawStatus {
+                unsafe { abi::unsupported(c, "fmi3ActivateModelPartition", "this FMU supports only Co-Simulation") }
+            }
+        }
+    };
+}
+
+/// The getters and setters of types without variables, for [`export_fmi3!`].
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __fmi3_no_such_type {
+    ($($name:ident $type_name:literal $dir:ident $t:ty;)*) => {$(
+        $crate::__fmi3_no_such_type!(@one $name $type_name $dir $t);
+    )*};
+    (@one $name:ident $type_name:literal get $t:ty) => {
+        #[no_mangle]
+        pub unsafe extern "C" fn $name(c: Fmi3Instance, vr: *const u32, n: usize, _v: *mut $t, _nv: usize) -> RawStatus {
+            unsafe { abi::no_such_type(c, stringify!($name), $type_name, false, vr, n) }
+        }
+    };
+    (@one $name:ident $type_name:literal set $t:ty) => {
+        #[no_mangle]
+        pub unsafe extern "C" fn $name(c: Fmi3Instance, vr: *const u32, n: usize, _v: *const $t, _nv: usize) -> RawStatus {
+            unsafe { abi::no_such_type(c, stringify!($name), $type_name, true, vr, n) }
+        }
+    };
+}

@@ -1,0 +1,254 @@
+//! The FMI 3.0 `modelDescription.xml` of a model, written from the same table as its FMI 2.0
+//! one, and the FMI 3.0 value references.
+//!
+//! FMI 3.0 wants value references unique over all variables, where FMI 2.0 numbers them per
+//! base type (and fmi2-export does). Here a variable's FMI 3.0 value reference is its position
+//! in `ModelVariables` (time is 0), and [`Fmi3Variables`] maps it back to the base type and FMI
+//! 2.0 value reference the shared instance works with.
+//!
+//! Types: `Real` is `Float64`, `Integer` is `Int32`, `Boolean` and `String` keep their names,
+//! and an `Enumeration` is read and set as `Int64` (FMI 3.0 section 2.4.7.5). The variables are
+//! scalars; the instantiation token is the FMI 2.0 GUID, so the twins of one model carry the same
+//! identity.
+
+use std::io::Cursor;
+
+use fmi2_export::description::{BaseType, BASE_UNITS, LOG_CATEGORIES};
+use fmi2_export::{Causality, Kind, ModelDescription};
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
+use quick_xml::Writer;
+
+/// The FMI 3.0 type of a variable: the functions that read and set it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fmi3Type {
+    /// `Float64` (an FMI 2.0 `Real`).
+    Float64,
+    /// `Int32` (an FMI 2.0 `Integer`).
+    Int32,
+    /// `Enumeration`, accessed with `fmi3GetInt64`/`fmi3SetInt64`.
+    Enumeration,
+    /// `Boolean`.
+    Boolean,
+    /// `String`.
+    String,
+}
+
+impl Fmi3Type {
+    /// The type of a variable of `kind`.
+    pub fn of(kind: &Kind) -> Self {
+        match kind {
+            Kind::Real { .. } => Fmi3Type::Float64,
+            Kind::Integer { .. } => Fmi3Type::Int32,
+            Kind::Enumeration { .. } => Fmi3Type::Enumeration,
+            Kind::Boolean { .. } => Fmi3Type::Boolean,
+            Kind::String { .. } => Fmi3Type::String,
+        }
+    }
+
+    /// The XML element name, which is also the name in `fmi3Get…`/`fmi3Set…` (but for
+    /// enumerations, which use `Int64`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Fmi3Type::Float64 => "Float64",
+            Fmi3Type::Int32 => "Int32",
+            Fmi3Type::Enumeration => "Enumeration",
+            Fmi3Type::Boolean => "Boolean",
+            Fmi3Type::String => "String",
+        }
+    }
+
+    /// The FMI 2.0 base type the values are kept as.
+    pub fn base_type(self) -> BaseType {
+        match self {
+            Fmi3Type::Float64 => BaseType::Real,
+            Fmi3Type::Int32 | Fmi3Type::Enumeration => BaseType::Integer,
+            Fmi3Type::Boolean => BaseType::Boolean,
+            Fmi3Type::String => BaseType::String,
+        }
+    }
+}
+
+/// The FMI 3.0 value references of a model: for each (its position in the description's
+/// variables), the type and the FMI 2.0 value reference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fmi3Variables {
+    entries: Vec<(Fmi3Type, u32)>,
+}
+
+impl Fmi3Variables {
+    /// The value references of `description`.
+    pub fn new(description: &ModelDescription) -> Self {
+        Self { entries: description.variables.iter().map(|v| (Fmi3Type::of(&v.kind), v.value_reference)).collect() }
+    }
+
+    /// Type and FMI 2.0 value reference of the FMI 3.0 value reference `vr`.
+    pub fn get(&self, vr: u32) -> Option<(Fmi3Type, u32)> {
+        self.entries.get(vr as usize).copied()
+    }
+
+    /// The FMI 3.0 value reference of the variable at `index` in the description: the index.
+    pub fn value_reference(index: usize) -> u32 {
+        u32::try_from(index).expect("fewer than 2^32 variables")
+    }
+
+    /// How many variables there are.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+/// The FMI 3.0 `modelDescription.xml` of `d`.
+pub fn to_xml(d: &ModelDescription) -> String {
+    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+    let ok = "writing XML to memory cannot fail";
+    let token = d.guid();
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).expect(ok);
+    let root = BytesStart::new("fmiModelDescription").with_attributes([
+        ("fmiVersion", "3.0"),
+        ("modelName", d.model_name.as_str()),
+        ("instantiationToken", token.as_str()),
+        ("description", d.description.as_str()),
+        ("generationTool", d.generation_tool.as_str()),
+        ("variableNamingConvention", "flat"),
+    ]);
+    w.write_event(Event::Start(root)).expect(ok);
+    w.write_event(Event::Empty(BytesStart::new("CoSimulation").with_attributes([
+        ("modelIdentifier", d.model_identifier.as_str()),
+        ("canGetAndSetFMUState", "true"),
+        ("canSerializeFMUState", "true"),
+        ("canHandleVariableCommunicationStepSize", if d.can_handle_variable_step { "true" } else { "false" }),
+        ("hasEventMode", "false"),
+    ])))
+    .expect(ok);
+
+    let units = d.units();
+    if !units.is_empty() {
+        w.write_event(Event::Start(BytesStart::new("UnitDefinitions"))).expect(ok);
+        for u in units {
+            w.write_event(Event::Start(BytesStart::new("Unit").with_attributes([("name", u.name)]))).expect(ok);
+            let mut attributes: Vec<(&str, String)> =
+                BASE_UNITS.iter().zip(u.exponents()).filter(|(_, e)| *e != 0).map(|(n, e)| (*n, e.to_string())).collect();
+            if u.factor != 1.0 {
+                attributes.push(("factor", u.factor.to_string()));
+            }
+            if u.offset != 0.0 {
+                attributes.push(("offset", u.offset.to_string()));
+            }
+            let base = BytesStart::new("BaseUnit").with_attributes(attributes.iter().map(|(n, e)| (*n, e.as_str())));
+            w.write_event(Event::Empty(base)).expect(ok);
+            w.write_event(Event::End(BytesEnd::new("Unit"))).expect(ok);
+        }
+        w.write_event(Event::End(BytesEnd::new("UnitDefinitions"))).expect(ok);
+    }
+
+    let enumerations = d.enumeration_types();
+    if !enumerations.is_empty() {
+        w.write_event(Event::Start(BytesStart::new("TypeDefinitions"))).expect(ok);
+        for t in enumerations {
+            w.write_event(Event::Start(BytesStart::new("EnumerationType").with_attributes([("name", t.name.as_str())]))).expect(ok);
+            for item in &t.items {
+                let value = item.value.to_string();
+                let e = BytesStart::new("Item").with_attributes([
+                    ("name", item.name.as_str()),
+                    ("value", value.as_str()),
+                    ("description", item.description.as_str()),
+                ]);
+                w.write_event(Event::Empty(e)).expect(ok);
+            }
+            w.write_event(Event::End(BytesEnd::new("EnumerationType"))).expect(ok);
+        }
+        w.write_event(Event::End(BytesEnd::new("TypeDefinitions"))).expect(ok);
+    }
+
+    w.write_event(Event::Start(BytesStart::new("LogCategories"))).expect(ok);
+    for c in LOG_CATEGORIES {
+        let description = c.description.replace("fmi2", "fmi3");
+        let e = BytesStart::new("Category").with_attributes([("name", c.name), ("description", description.as_str())]);
+        w.write_event(Event::Empty(e)).expect(ok);
+    }
+    w.write_event(Event::End(BytesEnd::new("LogCategories"))).expect(ok);
+
+    if let Some(de) = &d.default_experiment {
+        let (start, stop, step) = (de.start_time.to_string(), de.stop_time.to_string(), de.step_size.to_string());
+        w.write_event(Event::Empty(BytesStart::new("DefaultExperiment").with_attributes([
+            ("startTime", start.as_str()),
+            ("stopTime", stop.as_str()),
+            ("stepSize", step.as_str()),
+        ])))
+        .expect(ok);
+    }
+
+    w.write_event(Event::Start(BytesStart::new("ModelVariables"))).expect(ok);
+    for (index, v) in d.variables.iter().enumerate() {
+        let vr = Fmi3Variables::value_reference(index).to_string();
+        let kind = Fmi3Type::of(&v.kind);
+        let mut e = BytesStart::new(kind.name()).with_attributes([
+            ("name", v.name.as_str()),
+            ("valueReference", vr.as_str()),
+            ("description", v.description.as_str()),
+            ("causality", v.causality.name()),
+            ("variability", v.variability.name()),
+        ]);
+        if let Kind::Enumeration { declared_type, .. } = &v.kind {
+            e.push_attribute(("declaredType", declared_type.name.as_str()));
+        }
+        match v.causality {
+            Causality::Parameter => e.push_attribute(("initial", "exact")),
+            Causality::Output | Causality::Local if v.is_exact() => e.push_attribute(("initial", "exact")),
+            Causality::Output => e.push_attribute(("initial", "calculated")),
+            _ => {}
+        }
+        if let Some(unit) = v.kind.unit() {
+            e.push_attribute(("unit", unit.name));
+        }
+        let start = v.kind.start_text();
+        match (&v.kind, start) {
+            // A String's start value is a child element in FMI 3.0 (strings may be arrays).
+            (Kind::String { .. }, Some(text)) => {
+                w.write_event(Event::Start(e)).expect(ok);
+                w.write_event(Event::Empty(BytesStart::new("Start").with_attributes([("value", text.as_str())]))).expect(ok);
+                w.write_event(Event::End(BytesEnd::new(kind.name()))).expect(ok);
+            }
+            (_, start) => {
+                if let Some(start) = start {
+                    e.push_attribute(("start", start.as_str()));
+                }
+                w.write_event(Event::Empty(e)).expect(ok);
+            }
+        }
+    }
+    w.write_event(Event::End(BytesEnd::new("ModelVariables"))).expect(ok);
+
+    // ModelStructure lists value references in FMI 3.0 (FMI 2.0: 1-based indices); the
+    // dependencies of an output are the inputs it depends on directly, none when empty.
+    w.write_event(Event::Start(BytesStart::new("ModelStructure"))).expect(ok);
+    let outputs: Vec<(usize, &fmi2_export::Variable)> =
+        d.variables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).collect();
+    for (index, v) in &outputs {
+        let vr = Fmi3Variables::value_reference(*index).to_string();
+        // output_dependencies are 1-based indices; the value reference is the 0-based index.
+        let deps = v.output_dependencies.iter().map(|i| (i - 1).to_string()).collect::<Vec<_>>().join(" ");
+        let mut e = BytesStart::new("Output").with_attributes([("valueReference", vr.as_str()), ("dependencies", deps.as_str())]);
+        if !v.output_dependencies.is_empty() {
+            let kinds = vec!["dependent"; v.output_dependencies.len()].join(" ");
+            e.push_attribute(("dependenciesKind", kinds.as_str()));
+        }
+        w.write_event(Event::Empty(e)).expect(ok);
+    }
+    // Outputs without initial="exact" are computed in initialization mode (from parameters
+    // and, with direct feedthrough, inputs): no dependencies attribute, "may depend on all".
+    for (index, _) in outputs.iter().filter(|(_, v)| !v.is_exact()) {
+        let vr = Fmi3Variables::value_reference(*index).to_string();
+        w.write_event(Event::Empty(BytesStart::new("InitialUnknown").with_attributes([("valueReference", vr.as_str())]))).expect(ok);
+    }
+    w.write_event(Event::End(BytesEnd::new("ModelStructure"))).expect(ok);
+    w.write_event(Event::End(BytesEnd::new("fmiModelDescription"))).expect(ok);
+    let mut text = String::from_utf8(w.into_inner().into_inner()).expect("XML is UTF-8");
+    text.push('\n');
+    text
+}

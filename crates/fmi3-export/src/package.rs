@@ -1,0 +1,96 @@
+//! Packing an FMI 3.0 `.fmu`: `modelDescription.xml` for FMI 3.0, the binaries in FMI 3.0's
+//! platform folders (`x86_64-linux`, `x86_64-windows`, `x86_64-darwin`, `aarch64-darwin`,
+//! `aarch64-linux`, …), resources and documentation.
+//!
+//! The binaries are given under their FMI 2.0 platform names, as fmi2-export builds and
+//! checks them (`linux64`, `win64`, `darwin64`, `aarch64-linux`): one library that carries
+//! both the `fmi2*` and the `fmi3*` functions serves both twins. A universal macOS library
+//! (`darwin64`, x86_64 + arm64) goes into both `x86_64-darwin` and `aarch64-darwin`, each
+//! architecture a folder holding it; a thin one only into its own architecture's folder.
+
+use std::path::Path;
+
+use fmi2_export::package::{check_binary, documentation_page, library_extension, write_archive};
+use fmi2_export::ModelDescription;
+
+/// The FMI 3.0 platform folders (section 2.5.1.2) of a library built for the FMI 2.0 platform
+/// `platform`, given its bytes (a macOS library holds one or two architectures).
+pub fn platform_folders(platform: &str, bytes: &[u8]) -> Result<Vec<&'static str>, String> {
+    Ok(match platform {
+        "linux64" => vec!["x86_64-linux"],
+        "linux32" => vec!["x86-linux"],
+        "win64" => vec!["x86_64-windows"],
+        "win32" => vec!["x86-windows"],
+        "aarch64-linux" => vec!["aarch64-linux"],
+        "darwin32" => vec!["x86-darwin"],
+        "darwin64" => {
+            let mut folders = Vec::new();
+            for (architecture, folder) in [("x86_64", "x86_64-darwin"), ("arm64", "aarch64-darwin")] {
+                if macho_architectures(bytes)?.contains(&architecture) {
+                    folders.push(folder);
+                }
+            }
+            folders
+        }
+        other => return Err(format!("no FMI 3.0 platform folder known for {other:?}")),
+    })
+}
+
+/// The architectures of a Mach-O library ("x86_64", "arm64"), thin or universal.
+fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, String> {
+    // Universal header (big endian): magic, count, then (cputype, subtype, offset, size, align).
+    let be = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
+    let le = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let name = |cpu: u32| match cpu {
+        0x0100_0007 => Some("x86_64"),
+        0x0100_000c => Some("arm64"),
+        _ => None,
+    };
+    let mut found = Vec::new();
+    match be(0) {
+        Some(0xcafe_babe) | Some(0xcafe_babf) => {
+            let wide = be(0) == Some(0xcafe_babf);
+            let count = be(4).ok_or("a truncated universal Mach-O")? as usize;
+            let stride = if wide { 32 } else { 20 };
+            for k in 0..count {
+                let cpu = be(8 + k * stride).ok_or("a truncated universal Mach-O")?;
+                found.extend(name(cpu));
+            }
+        }
+        _ if le(0) == Some(0xfeed_facf) => found.extend(le(4).and_then(name)),
+        _ => return Err("not a Mach-O library".into()),
+    }
+    Ok(found)
+}
+
+/// Writes the FMI 3.0 twin of a model to `path`: like
+/// [`fmi2_export::package::write_fmu`] (the same binaries, checked the same way, the same
+/// resources), with the FMI 3.0 model description and platform folders, and the library named
+/// `<modelIdentifier>.<ext>` (FMI 3.0 has no `lib` prefix). Nothing is left at `path` on
+/// failure.
+pub fn write_fmu(
+    path: &Path,
+    description: &ModelDescription,
+    binaries: &[(&str, &Path)],
+    resources: &[(&str, Vec<u8>)],
+    equations_html: &str,
+) -> std::io::Result<()> {
+    let invalid = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, m);
+    if binaries.is_empty() {
+        return Err(invalid("no platform binary to pack".into()));
+    }
+    let mut libraries = Vec::new();
+    for (i, (platform, binary)) in binaries.iter().enumerate() {
+        if binaries[..i].iter().any(|(p, _)| p == platform) {
+            return Err(invalid(format!("platform {platform} given twice")));
+        }
+        let extension = library_extension(platform).ok_or_else(|| invalid(format!("unknown platform folder {platform:?}")))?;
+        let bytes = std::fs::read(binary).map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", binary.display())))?;
+        check_binary(platform, &bytes).map_err(|e| invalid(format!("{}: {e}", binary.display())))?;
+        for folder in platform_folders(platform, &bytes).map_err(|e| invalid(format!("{}: {e}", binary.display())))? {
+            libraries.push((format!("binaries/{folder}/{}.{extension}", description.model_identifier), bytes.clone()));
+        }
+    }
+    let html = documentation_page(description, equations_html, "FMI 3.0 Co-Simulation; instantiation token");
+    write_archive(path, &crate::description::to_xml(description), &libraries, resources, &html)
+}
