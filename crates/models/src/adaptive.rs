@@ -382,7 +382,9 @@ impl AdaptiveCompensatorModel {
                 Some(i) => (use_friction, law.gain_friction, law.bound_friction, i),
                 None => (use_gravity, law.gain_gravity, law.bound_gravity, row.output),
             };
-            if !used {
+            // A friction row does not learn at rest: its output is 0 there whatever the weights
+            // (see the compensator's compute).
+            if !used || row.friction_net.is_some() && values[self.core.ports.qd[joint]] == 0.0 {
                 continue;
             }
             // The regressor: the hidden layer at the current input, and the bias.
