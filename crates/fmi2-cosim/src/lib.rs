@@ -1,4 +1,5 @@
-//! A co-simulation master for FMI 2.0 Co-Simulation FMUs, over the `fmi` crate.
+//! A co-simulation master for FMI 2.0 and FMI 3.0 Co-Simulation FMUs, mixed in one system,
+//! over the `fmi` crate.
 //!
 //! It loads `.fmu` files, sets parameters by name, connects outputs to inputs by name (with
 //! `*` patterns), steps at a fixed communication step (Gauss–Seidel in dependency order, or
@@ -70,7 +71,7 @@ pub mod system;
 mod unit;
 
 pub use error::{DiscardedStep, MasterError};
-pub use interface::{BaseType, Causality, EnumerationInfo, Initial, Interface, Variability, VariableInfo};
+pub use interface::{BaseType, Causality, EnumerationInfo, FmiVersion, Initial, Interface, Variability, VariableInfo};
 pub use recording::{run, RunOutcome};
 pub use simulation::{Handle, RunEnd, Simulation};
 pub use spec::{Algorithm, ConnectionSpec, EventSpec, FmuEntry, OnDiscard, SimulationSpec, SystemSpec, Value};

@@ -6,8 +6,6 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use fmi::fmi2::instance::Common;
-
 use crate::capture;
 use crate::error::MasterError;
 use crate::interface::BaseType;
@@ -57,26 +55,30 @@ impl Recorder {
             let v = match base.access() {
                 BaseType::Real => {
                     let mut x = [0.0];
-                    unit.instance.get_real(&[vr], &mut x).map(|_| x[0])
+                    unit.get_real(&[vr], &mut x).map(|_| x[0])
                 }
                 BaseType::Integer => {
                     let mut x = [0];
-                    unit.instance.get_integer(&[vr], &mut x).map(|_| x[0] as f64)
+                    unit.get_integer(&[vr], &mut x).map(|_| x[0] as f64)
                 }
                 BaseType::Boolean => {
                     let mut x = [0];
-                    unit.instance.get_boolean(&[vr], &mut x).map(|_| f64::from(x[0] != 0))
+                    unit.get_boolean(&[vr], &mut x).map(|_| f64::from(x[0] != 0))
                 }
                 _ => {
                     let mut x = [CString::default()];
-                    unit.instance.get_string(&[vr], &mut x).map(|()| {
+                    unit.get_string(&[vr], &mut x).map(|()| {
                         let [text] = x;
                         texts.push(text.to_string_lossy().into_owned());
                         f64::NAN
                     })
                 }
             };
-            row.push(v.map_err(|e| unit.fail("fmi2Get (recording)", e, mark, Some(time)))?);
+            row.push(v.map_err(|e| {
+                let mut x = unit.fail(e, mark, Some(time));
+                x.message += " (recording)";
+                x
+            })?);
         }
         self.rows.push(row);
         self.texts.push(texts);

@@ -48,9 +48,10 @@ pub(crate) struct Pass {
 pub(crate) fn slot(base: BaseType) -> usize {
     match base.access() {
         BaseType::Real => 0,
-        BaseType::Integer | BaseType::Enumeration => 1,
+        BaseType::Integer => 1,
         BaseType::Boolean => 2,
-        BaseType::String => 3,
+        // Strings; Binary and Clock are never connected.
+        _ => 3,
     }
 }
 
@@ -68,11 +69,11 @@ pub(crate) struct Schedule {
     /// direct feedthrough, sorted.
     reach: Vec<Vec<usize>>,
     pub buf_real: Vec<f64>,
-    pub buf_int: Vec<i32>,
+    pub buf_int: Vec<i64>,
     pub buf_bool: Vec<i32>,
     pub buf_str: Vec<CString>,
     pub set_real: Vec<f64>,
-    pub set_int: Vec<i32>,
+    pub set_int: Vec<i64>,
     pub set_bool: Vec<i32>,
     pub set_str: Vec<CString>,
     /// Passes whose outputs changed and have yet to be passed on.

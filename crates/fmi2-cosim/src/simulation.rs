@@ -33,9 +33,6 @@ use std::ffi::CString;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use fmi::fmi2::instance::{CoSimulation, Common};
-use fmi::fmi2::Fmi2Error;
-
 use crate::capture;
 use crate::error::{DiscardedStep, MasterError};
 use crate::interface::Variability;
@@ -44,7 +41,7 @@ use crate::recording::Recorder;
 use crate::schedule::Schedule;
 use crate::spec::{Algorithm, EventSpec, OnDiscard, Value};
 use crate::system::{check_value, split_name, System};
-use crate::unit::{SharedBinaries, Unit};
+use crate::unit::{SharedBinaries, Stepped, Unit};
 
 /// Steps shorter than this fraction of the communication step are not taken: the stop time
 /// counts as reached.
@@ -161,7 +158,7 @@ impl Simulation {
     fn start_up(&mut self, start: f64) -> Result<(), MasterError> {
         for u in &mut self.units {
             let mark = capture::mark();
-            u.instance.setup_experiment(None, start, None).map_err(|e| u.fail("fmi2SetupExperiment", e, mark, None))?;
+            u.setup(start).map_err(|e| u.fail(e, mark, None))?;
         }
         for k in 0..self.system.settings().len() {
             let s = &self.system.settings()[k];
@@ -170,12 +167,12 @@ impl Simulation {
         }
         for u in &mut self.units {
             let mark = capture::mark();
-            u.instance.enter_initialization_mode().map_err(|e| u.fail("fmi2EnterInitializationMode", e, mark, None))?;
+            u.enter_initialization(start).map_err(|e| u.fail(e, mark, None))?;
         }
         self.resolve_all(None)?;
         for u in &mut self.units {
             let mark = capture::mark();
-            u.instance.exit_initialization_mode().map_err(|e| u.fail("fmi2ExitInitializationMode", e, mark, None))?;
+            u.exit_initialization().map_err(|e| u.fail(e, mark, None))?;
         }
         self.resolve_all(Some(start))?;
         self.recorder.record(&mut self.units, self.time)?;
@@ -191,18 +188,18 @@ impl Simulation {
         let unit = &mut self.units[ui];
         let mark = capture::mark();
         let r = match &value {
-            Value::Real(x) => unit.instance.set_real(&vr, &[*x]).map(|_| ()),
-            Value::Integer(i) if base == BaseType::Real => unit.instance.set_real(&vr, &[*i as f64]).map(|_| ()),
-            Value::Integer(i) => unit.instance.set_integer(&vr, &[*i as i32]).map(|_| ()),
-            Value::Boolean(b) => unit.instance.set_boolean(&vr, &[*b as i32]).map(|_| ()),
+            Value::Real(x) => unit.set_real(&vr, &[*x]),
+            Value::Integer(i) if base.access() == BaseType::Real => unit.set_real(&vr, &[*i as f64]),
+            Value::Integer(i) => unit.set_integer(&vr, &[*i]),
+            Value::Boolean(b) => unit.set_boolean(&vr, &[*b as i32]),
             Value::String(s) => {
                 let c =
                     CString::new(s.as_str()).map_err(|_| MasterError::new("a string holds a NUL byte").unit(&unit.name).variable(name))?;
-                unit.instance.set_string(&vr, &[c])
+                unit.set_string(&vr, &[c])
             }
         };
         r.map_err(|e| {
-            let mut x = unit.fail("fmi2Set", e, mark, None).variable(name);
+            let mut x = unit.fail(e, mark, None).variable(name);
             x.message = format!("setting {value:?} refused: {}", x.message);
             x
         })
@@ -225,28 +222,16 @@ impl Simulation {
             let mark = capture::mark();
             let [reals, ints, bools, strings] = &pass.reads;
             if !reals.is_empty() {
-                units[u]
-                    .instance
-                    .get_real(reals, &mut plan.buf_real[..reals.len()])
-                    .map_err(|e| units[u].fail("fmi2GetReal", e, mark, time))?;
+                units[u].get_real(reals, &mut plan.buf_real[..reals.len()]).map_err(|e| units[u].fail(e, mark, time))?;
             }
             if !ints.is_empty() {
-                units[u]
-                    .instance
-                    .get_integer(ints, &mut plan.buf_int[..ints.len()])
-                    .map_err(|e| units[u].fail("fmi2GetInteger", e, mark, time))?;
+                units[u].get_integer(ints, &mut plan.buf_int[..ints.len()]).map_err(|e| units[u].fail(e, mark, time))?;
             }
             if !bools.is_empty() {
-                units[u]
-                    .instance
-                    .get_boolean(bools, &mut plan.buf_bool[..bools.len()])
-                    .map_err(|e| units[u].fail("fmi2GetBoolean", e, mark, time))?;
+                units[u].get_boolean(bools, &mut plan.buf_bool[..bools.len()]).map_err(|e| units[u].fail(e, mark, time))?;
             }
             if !strings.is_empty() {
-                units[u]
-                    .instance
-                    .get_string(strings, &mut plan.buf_str[..strings.len()])
-                    .map_err(|e| units[u].fail("fmi2GetString", e, mark, time))?;
+                units[u].get_string(strings, &mut plan.buf_str[..strings.len()]).map_err(|e| units[u].fail(e, mark, time))?;
             }
             for t in &pass.transfers {
                 let m = t.vrs.len();
@@ -256,25 +241,25 @@ impl Simulation {
                         for (v, &k) in plan.set_real.iter_mut().zip(&t.from) {
                             *v = plan.buf_real[k];
                         }
-                        target.instance.set_real(&t.vrs, &plan.set_real[..m]).map(|_| ())
+                        target.set_real(&t.vrs, &plan.set_real[..m])
                     }
                     BaseType::Integer => {
                         for (v, &k) in plan.set_int.iter_mut().zip(&t.from) {
                             *v = plan.buf_int[k];
                         }
-                        target.instance.set_integer(&t.vrs, &plan.set_int[..m]).map(|_| ())
+                        target.set_integer(&t.vrs, &plan.set_int[..m])
                     }
                     BaseType::Boolean => {
                         for (v, &k) in plan.set_bool.iter_mut().zip(&t.from) {
                             *v = plan.buf_bool[k];
                         }
-                        target.instance.set_boolean(&t.vrs, &plan.set_bool[..m]).map(|_| ())
+                        target.set_boolean(&t.vrs, &plan.set_bool[..m])
                     }
                     _ => {
                         for (v, &k) in plan.set_str.iter_mut().zip(&t.from) {
                             v.clone_from(&plan.buf_str[k]);
                         }
-                        target.instance.set_string(&t.vrs, &plan.set_str[..m])
+                        target.set_string(&t.vrs, &plan.set_str[..m])
                     }
                 };
                 r.map_err(|e| {
@@ -285,7 +270,9 @@ impl Simulation {
                         .filter(|l| l.to_unit == t.to && l.base.access() == t.base && t.vrs.contains(&l.to_vr))
                         .map(|l| l.to_variable.as_str())
                         .collect();
-                    target.fail("fmi2Set (connection)", e, mark, time).variable(&names.join(", "))
+                    let mut x = target.fail(e, mark, time).variable(&names.join(", "));
+                    x.message += " (passing a connection on)";
+                    x
                 })?;
             }
             for t in 0..self.schedule.passes[p].transfers.len() {
@@ -362,7 +349,7 @@ impl Simulation {
                     }));
                 }
                 check_value(&plan.interface, info, value).map_err(|m| fail(&m))?;
-                if event.until.is_some() && info.base != BaseType::Real {
+                if event.until.is_some() && info.base.access() != BaseType::Real {
                     return Err(fail("only a Real variable can be ramped"));
                 }
                 added.push(Scheduled {
@@ -423,16 +410,14 @@ impl Simulation {
                         None => {
                             let mut x = [0.0];
                             let mark = capture::mark();
-                            u.instance.get_real(&vr, &mut x).map_err(|err| u.fail("fmi2GetReal", err, mark, Some(t)))?;
+                            u.get_real(&vr, &mut x).map_err(|err| u.fail(err, mark, Some(t)))?;
                             x[0]
                         }
                     };
                     let end = due >= until;
                     let x = if end { target } else { from + (target - from) * ((t - e.time) / (until - e.time)).clamp(0.0, 1.0) };
                     let mark = capture::mark();
-                    u.instance
-                        .set_real(&vr, &[x])
-                        .map_err(|err| u.fail("fmi2SetReal", err, mark, Some(t)).variable(&self.events[k].variable))?;
+                    u.set_real(&vr, &[x]).map_err(|err| u.fail(err, mark, Some(t)).variable(&self.events[k].variable))?;
                     self.events[k].from = Some(from);
                     self.events[k].done = end;
                 }
@@ -500,27 +485,22 @@ impl Simulation {
     fn do_step(&mut self, u: usize, t: f64, h: f64) -> Result<(), MasterError> {
         let unit = &mut self.units[u];
         let mark = capture::mark();
-        match unit.instance.do_step(t, h, true) {
-            Ok(_) => Ok(()),
-            Err(Fmi2Error::Discard) => {
-                let status = DiscardedStep {
-                    last_successful_time: unit.instance.last_successful_time().ok(),
-                    terminated: unit.instance.terminated().ok(),
-                };
-                let mut e = unit.fail("fmi2DoStep", Fmi2Error::Discard, mark, Some(t));
+        let call = format!("{}DoStep", unit.version().prefix());
+        match unit.do_step(t, h) {
+            Ok(Stepped::Completed) => Ok(()),
+            Ok(Stepped::Discarded(status)) => {
+                let mut e = unit.fail(crate::unit::CallError { call: call.clone(), status: "Discard".into() }, mark, Some(t));
                 e.message = match (status.terminated, status.last_successful_time) {
-                    (Some(true), _) => {
-                        "the unit asks to end the simulation (fmi2DoStep returned fmi2Discard, fmi2Terminated is true)".into()
+                    (Some(true), _) => format!("the unit asks to end the simulation ({call} returned with the request to terminate)"),
+                    (_, Some(last)) => {
+                        format!("{call} returned Discard: the step from {t} s by {h} s was not completed (last successful time {last} s)")
                     }
-                    (_, Some(last)) => format!(
-                        "fmi2DoStep returned fmi2Discard: the step from {t} s by {h} s was not completed (last successful time {last} s)"
-                    ),
-                    _ => format!("fmi2DoStep returned fmi2Discard: the step from {t} s by {h} s was not completed"),
+                    _ => format!("{call} returned Discard: the step from {t} s by {h} s was not completed"),
                 };
                 e.discard = Some(Box::new(status));
                 Err(e)
             }
-            Err(e) => Err(unit.fail("fmi2DoStep", e, mark, Some(t))),
+            Err(e) => Err(unit.fail(e, mark, Some(t))),
         }
     }
 
@@ -615,8 +595,8 @@ impl Simulation {
         let (u, v) = split_name(full)?;
         let ui = self.system.unit_index(u)?;
         let info = self.system.units()[ui].variable(v)?;
-        if info.base != BaseType::Real {
-            return Err(MasterError::new(format!("type mismatch: {:?}, not Real", info.base)).unit(u).variable(v));
+        if info.base.access() != BaseType::Real || info.is_array {
+            return Err(MasterError::new(format!("type mismatch: {:?}, not a scalar Real", info.base)).unit(u).variable(v));
         }
         let connected = self.system.is_connected(ui, info.value_reference, BaseType::Real);
         let settable = matches!(info.causality, Causality::Input | Causality::Parameter) && !connected;
@@ -632,7 +612,7 @@ impl Simulation {
                 return Err(MasterError::new("not settable: a connected input, an output or a local").unit(&unit.name).at(self.time));
             }
             let mark = capture::mark();
-            unit.instance.set_real(&[h.value_reference], &[x]).map_err(|e| unit.fail("fmi2SetReal", e, mark, Some(self.time)))?;
+            unit.set_real(&[h.value_reference], &[x]).map_err(|e| unit.fail(e, mark, Some(self.time)))?;
             self.schedule.touch_unit(h.unit);
         }
         self.resolve_dirty(Some(self.time), None)
@@ -645,7 +625,7 @@ impl Simulation {
             let unit = &mut self.units[h.unit];
             let mut x = [0.0];
             let mark = capture::mark();
-            unit.instance.get_real(&[h.value_reference], &mut x).map_err(|e| unit.fail("fmi2GetReal", e, mark, Some(self.time)))?;
+            unit.get_real(&[h.value_reference], &mut x).map_err(|e| unit.fail(e, mark, Some(self.time)))?;
             *o = x[0];
         }
         Ok(())

@@ -9,7 +9,9 @@
 //!   `implementation="CoSimulation"`). Two units loaded from the same file share one copy.
 //! - Per component, `ssd:Connectors` in `modelDescription.xml` order, each with its type
 //!   (`ssc:Real`, `ssc:Integer`, `ssc:Boolean`, `ssc:String`, `ssc:Enumeration name="…"` with
-//!   the type listed in `ssd:Enumerations`): every output (kind `output`), every *connected* input (kind `input`) and every parameter the spec sets
+//!   the type listed in `ssd:Enumerations`; an FMI 3.0 unit's Float64 and Float32 as `ssc:Real`,
+//!   its integers of every width as `ssc:Integer`; Binary, Clock and array variables get no
+//!   connector): every output (kind `output`), every *connected* input (kind `input`) and every parameter the spec sets
 //!   (kind `parameter`; an enumeration has none, as an `ssc:Enumeration` needs a declared
 //!   type and libcosim refuses an untyped connector). An input that is not connected gets no
 //!   connector, even when the spec sets it: SSP only requires connectors for what connections
@@ -154,11 +156,20 @@ fn xs_double(x: f64) -> String {
 /// set as an integer (`fmi2SetInteger`), and an ssv:Enumeration would need its item's name.
 fn parameter_value(base: BaseType, value: &Value) -> (&'static str, String) {
     match (base, value) {
-        (BaseType::Real, Value::Integer(i)) => ("ssv:Real", xs_double(*i as f64)),
+        (b, Value::Integer(i)) if b.access() == BaseType::Real => ("ssv:Real", xs_double(*i as f64)),
         (_, Value::Real(x)) => ("ssv:Real", xs_double(*x)),
         (_, Value::Integer(i)) => ("ssv:Integer", i.to_string()),
         (_, Value::Boolean(b)) => ("ssv:Boolean", b.to_string()),
         (_, Value::String(s)) => ("ssv:String", s.clone()),
+    }
+}
+
+/// The SSP 1.0 connector type of `base`: FMI 3.0's types by their class (Float64 and
+/// Float32 as Real, every integer type as Integer).
+fn ssp_type(base: BaseType) -> &'static str {
+    match base {
+        BaseType::Enumeration => "Enumeration",
+        b => b.access().name(),
     }
 }
 
@@ -206,7 +217,8 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, events: &[EventSpec], s
             .iter()
             .filter_map(|v| {
                 let kind = match v.causality {
-                    Causality::Output if v.base.is_connectable() => "output",
+                    _ if v.is_array || !v.base.is_connectable() => return None,
+                    Causality::Output => "output",
                     Causality::Input if connected(&v.name) => "input",
                     // An ssc:Enumeration needs a declared enumeration type, and libcosim refuses
                     // an untyped connector: the binding below sets it without one.
@@ -220,7 +232,7 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, events: &[EventSpec], s
             start(&mut w, BytesStart::new("ssd:Connectors"));
             for (name, kind, base) in connectors {
                 start(&mut w, BytesStart::new("ssd:Connector").with_attributes([("name", name), ("kind", kind)]));
-                let mut t = BytesStart::new(format!("ssc:{}", base.name()));
+                let mut t = BytesStart::new(format!("ssc:{}", ssp_type(base)));
                 // An enumeration connector names its type, listed in ssd:Enumerations.
                 if let Some(e) = c.interface.get(name).and_then(|v| c.interface.enumeration_of(v)).filter(|_| base == BaseType::Enumeration)
                 {

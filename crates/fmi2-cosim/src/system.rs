@@ -83,20 +83,30 @@ pub(crate) fn split_name(full: &str) -> Result<(&str, &str), MasterError> {
 /// Checks that `value` fits variable `info` of `interface` and gives what is passed to the
 /// FMU: integers may set reals; an enumeration takes one of its items, by value or by name.
 pub(crate) fn check_value(interface: &Interface, info: &VariableInfo, value: &Value) -> Result<Value, String> {
+    if info.is_array || !info.base.is_connectable() {
+        let what = if info.is_array { "an array".to_owned() } else { format!("a {}", info.base.name()) };
+        return Err(format!("the variable is {what}, which this master does not set"));
+    }
+    let (base, class) = (info.base, info.base.access());
     let ok = matches!(
-        (info.base, value),
-        (BaseType::Real, Value::Real(_) | Value::Integer(_))
-            | (BaseType::Integer, Value::Integer(_))
-            | (BaseType::Enumeration, Value::Integer(_) | Value::String(_))
-            | (BaseType::Boolean, Value::Boolean(_))
-            | (BaseType::String, Value::String(_))
+        (base, class, value),
+        (_, BaseType::Real, Value::Real(_) | Value::Integer(_))
+            | (BaseType::Enumeration, _, Value::Integer(_) | Value::String(_))
+            | (_, BaseType::Integer, Value::Integer(_))
+            | (BaseType::Boolean, _, Value::Boolean(_))
+            | (BaseType::String, _, Value::String(_))
     );
     if !ok {
         return Err(format!("type mismatch: the variable is {:?}, the value {value:?}", info.base));
     }
-    match (info.base, value) {
-        (BaseType::Real, Value::Integer(i)) => Ok(Value::Real(*i as f64)),
-        (BaseType::Integer, Value::Integer(i)) if i32::try_from(*i).is_err() => Err(format!("{i} does not fit an fmi2Integer")),
+    if let (Some((low, high)), Value::Integer(i)) = (base.integer_range(), value) {
+        if base != BaseType::Enumeration && !(low..=high).contains(&i128::from(*i)) {
+            let name = if base == BaseType::Integer { "an fmi2Integer".to_owned() } else { format!("a {}", base.name()) };
+            return Err(format!("{i} does not fit {name}"));
+        }
+    }
+    match (base, value) {
+        (_, Value::Integer(i)) if class == BaseType::Real => Ok(Value::Real(*i as f64)),
         (BaseType::Enumeration, _) => {
             let items = interface.enumeration_of(info).map_or(&[][..], |e| &e.items[..]);
             let found = items.iter().find(|(name, v)| match value {
@@ -262,9 +272,20 @@ impl System {
                 let what = dst.causality.with_article();
                 return Err(MasterError::new(format!("a connection must end at an input, not {what}")).unit(tu).variable(&tv));
             }
-            if src.base != dst.base {
+            for (unit, name, v) in [(fu, &fv, src), (tu, &tv, dst)] {
+                if v.is_array || !v.base.is_connectable() {
+                    let what = if v.is_array { "an array".to_owned() } else { format!("a {}", v.base.name()) };
+                    return Err(MasterError::new(format!("{what} cannot be connected by this master")).unit(unit).variable(name));
+                }
+            }
+            // Across FMI versions and widths: Real to Float64 or Float32, any integer to any
+            // integer (a value that does not fit the input fails the run, naming it), an
+            // enumeration to an enumeration only.
+            let same_class = src.base.access() == dst.base.access()
+                && (src.base == BaseType::Enumeration) == (dst.base == BaseType::Enumeration);
+            if !same_class {
                 return Err(MasterError::new(format!(
-                    "type mismatch: {fu}.{fv} is {:?}, {tu}.{tv} is {:?} (each type connects to its own)",
+                    "type mismatch: {fu}.{fv} is {:?}, {tu}.{tv} is {:?} (reals connect to reals, integers to integers, enumerations, Booleans and strings to their own)",
                     src.base, dst.base
                 ))
                 .unit(tu)
@@ -313,6 +334,10 @@ impl System {
                 let (u, v) = split_name(full)?;
                 let ui = self.unit_index(u)?;
                 let info = self.units[ui].variable(v)?;
+                if info.is_array || !info.base.is_connectable() {
+                    let what = if info.is_array { "an array".to_owned() } else { format!("a {}", info.base.name()) };
+                    return Err(MasterError::new(format!("{what} cannot be recorded by this master")).unit(u).variable(v));
+                }
                 Ok((ui, info.value_reference, info.base))
             })
             .collect()

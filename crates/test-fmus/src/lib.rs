@@ -1,6 +1,7 @@
 //! Small FMI 2.0 Co-Simulation FMUs on `fmi2-export` for testing masters: each exercises one
 //! thing the standard allows and a general master must handle. One binary serves them all; an
-//! FMU's `resources/model.txt` names its model. [`fmu_in`] packages one.
+//! FMU's `resources/model.txt` names its model. [`fmu_in`] packages one, [`fmu3_in`] its FMI 3.0
+//! twin (the same binary, which exports both APIs).
 //!
 //! - [`TestModel::Counter`]: counts its steps; a step from `stop_at` [s] on returns
 //!   `fmi2Discard` with `fmi2Terminated` true (or false with `retry`), as a model that reaches
@@ -24,7 +25,7 @@ use fmi2_export::{
     Unit, Values, Variability,
 };
 
-pub use package::{built_library, fmu_in};
+pub use package::{built_library, fmu3_in, fmu_in};
 
 /// The models of this crate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -347,3 +348,4 @@ fn factory(resources: Option<&Path>) -> Result<Box<dyn Model>, ModelError> {
 }
 
 fmi2_export::export_fmi2!(factory);
+fmi3_export::export_fmi3!(factory);

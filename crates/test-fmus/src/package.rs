@@ -45,3 +45,19 @@ pub fn fmu_in(dir: &Path, model: TestModel) -> Result<PathBuf, String> {
     .map_err(|e| format!("writing {}: {e}", out.display()))?;
     Ok(out)
 }
+
+/// `<Identifier>.fmi3.fmu` of `model` in `dir`: its FMI 3.0 twin, from the same library.
+pub fn fmu3_in(dir: &Path, model: TestModel) -> Result<PathBuf, String> {
+    let out = dir.join(format!("{}.fmi3.fmu", model.identifier()));
+    let built = model.build().map_err(|e| e.to_string())?;
+    let resources = [(MODEL_FILE, model.identifier().as_bytes().to_vec())];
+    fmi3_export::package::write_fmu(
+        &out,
+        built.description(),
+        &[(fmi2_export::package::PLATFORM.0, &built_library()?)],
+        &resources,
+        model.equations_html(),
+    )
+    .map_err(|e| format!("writing {}: {e}", out.display()))?;
+    Ok(out)
+}
