@@ -48,13 +48,36 @@ fn export(dir: &Path, args: &[&str], name: &str) -> PathBuf {
 /// loop for 2 s, with the compensator's torques added or not; returns the RMS distance of the
 /// end effector from the reference [m].
 fn tracking_error(dir: &Path, config: &ArmConfig, compensated: bool) -> f64 {
+    let placement = ReferencePlacement::for_arm(&config.arm);
+    let rows = tracking_rows(dir, config, compensated, [false; 3]);
+    // Independently of the controller: the reference from its formula, the end effector from
+    // the recorded angles.
+    let squares: f64 = rows
+        .iter()
+        .map(|row| {
+            let x_ref = scaled_reference(row[0], placement.centre, placement.scale).0;
+            (x_ref - end_effector_position(&config.arm, &row[1..])).norm_squared()
+        })
+        .sum();
+    (squares / rows.len() as f64).sqrt()
+}
+
+/// The recorded rows (time, arm angles) of the loop of [`tracking_error`], with arm,
+/// controller and compensator exported as FMI 3.0 where `fmi3` says so.
+fn tracking_rows(dir: &Path, config: &ArmConfig, compensated: bool, fmi3: [bool; 3]) -> Vec<Vec<f64>> {
     let n = config.arm.dof();
     let cfg = write_config(dir, "arm.toml", config);
     let cfg = cfg.to_str().unwrap();
-    let arm = export(dir, &["arm", "-c", cfg], "Arm.fmu");
-    let ctl = export(dir, &["controller", "task-space", "-c", cfg], "Ctl.fmu");
-    let comp = export(dir, &["compensator", "--ideal", "--friction", "-c", cfg], "Comp.fmu");
-    for (fmu, must, must_not) in [(&arm, "tau_", "q_ref_"), (&ctl, "tau_comp_", "q_ref_"), (&comp, "tau_friction_", "tau_")] {
+    let version = |three: bool| if three { ["--fmi", "3"] } else { ["--fmi", "2"] };
+    let arm = export(dir, &[&version(fmi3[0])[..], &["arm", "-c", cfg]].concat(), "Arm.fmu");
+    let ctl = export(dir, &[&version(fmi3[1])[..], &["controller", "task-space", "-c", cfg]].concat(), "Ctl.fmu");
+    let comp = export(dir, &[&version(fmi3[2])[..], &["compensator", "--ideal", "--friction", "-c", cfg]].concat(), "Comp.fmu");
+    for (fmu, must, must_not, three) in
+        [(&arm, "tau_", "q_ref_", fmi3[0]), (&ctl, "tau_comp_", "q_ref_", fmi3[1]), (&comp, "tau_friction_", "tau_", fmi3[2])]
+    {
+        if three {
+            continue;
+        }
         let names = variable_names(fmu);
         assert!(names.contains(&format!("{must}{n}")) && !names.contains(&format!("{must}{}", n + 1)), "{fmu:?}: {names:?}");
         assert!(!names.contains(&format!("{must_not}1")), "{fmu:?}");
@@ -76,17 +99,21 @@ fn tracking_error(dir: &Path, config: &ArmConfig, compensated: bool) -> f64 {
     let record: Vec<String> = (1..=n).map(|i| format!("arm.q_{i}")).collect();
     let mut sim = s.initialize(0.0, 1e-3, Algorithm::GaussSeidel, &record).unwrap();
     assert_eq!(sim.run_until(2.0).unwrap(), fmi2_cosim::RunEnd::Completed);
-    // Independently of the controller: the reference from its formula, the end effector from
-    // the recorded angles.
-    let squares: f64 = sim
-        .rows()
-        .iter()
-        .map(|row| {
-            let x_ref = scaled_reference(row[0], placement.centre, placement.scale).0;
-            (x_ref - end_effector_position(&config.arm, &row[1..])).norm_squared()
-        })
-        .sum();
-    (squares / sim.rows().len() as f64).sqrt()
+    sim.take_rows()
+}
+
+#[test]
+fn the_loop_gives_the_same_rows_with_fmi3_units_mixed_in() {
+    // The FMI 3.0 twins run the same model code: a loop of any mix of versions must give the
+    // very same numbers as the FMI 2.0 loop (the master passes f64 both ways).
+    let dir = tempfile::tempdir().unwrap();
+    let config = arm_config(3, 0.3);
+    let reference = tracking_rows(dir.path(), &config, true, [false; 3]);
+    assert_eq!(reference.len(), 2001);
+    for mix in [[true, false, true], [false, true, false], [true; 3]] {
+        let rows = tracking_rows(dir.path(), &config, true, mix);
+        assert_eq!(rows, reference, "FMI 3.0 where {mix:?}");
+    }
 }
 
 #[test]

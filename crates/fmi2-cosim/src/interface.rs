@@ -353,7 +353,16 @@ impl Pending {
             Some(t) => t.trim().parse().map_err(|_| format!("variable '{name}': valueReference '{t}' is not a number"))?,
             None => return Err(format!("variable '{name}' has no valueReference")),
         };
-        Ok(Self { name, causality, variability, initial, value_reference, base: None, element: e.name().as_ref().to_vec(), is_array: false })
+        Ok(Self {
+            name,
+            causality,
+            variability,
+            initial,
+            value_reference,
+            base: None,
+            element: e.name().as_ref().to_vec(),
+            is_array: false,
+        })
     }
 
     fn finish(self) -> Result<VariableInfo, String> {
@@ -595,7 +604,9 @@ impl Interface {
                     None => None,
                     Some(list) => Some(
                         list.into_iter()
-                            .map(|d| index_of(d).ok_or_else(|| format!("ModelStructure: dependency {d} is not a value reference of a variable")))
+                            .map(|d| {
+                                index_of(d).ok_or_else(|| format!("ModelStructure: dependency {d} is not a value reference of a variable"))
+                            })
                             .collect::<Result<Vec<_>, _>>()?,
                     ),
                 };
@@ -831,8 +842,10 @@ mod tests {
         // Value references are unique over all types in FMI 3.0.
         let e = Interface::parse(&XML3.replace(r#"name="b_in" valueReference="27""#, r#"name="b_in" valueReference="26""#)).unwrap_err();
         assert!(e.contains("'b_in': value reference 26 is used twice"), "{e}");
-        let e = Interface::parse(&XML3.replace(r#"<Output valueReference="2" dependencies="1"/>"#, r#"<Output valueReference="2" dependencies="99"/>"#))
-            .unwrap_err();
+        let e = Interface::parse(
+            &XML3.replace(r#"<Output valueReference="2" dependencies="1"/>"#, r#"<Output valueReference="2" dependencies="99"/>"#),
+        )
+        .unwrap_err();
         assert!(e.contains("dependency 99 is not a value reference"), "{e}");
         let e = Interface::parse(&XML3.replace(r#" instantiationToken="{t}""#, "")).unwrap_err();
         assert!(e.contains("no instantiationToken"), "{e}");

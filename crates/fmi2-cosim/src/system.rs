@@ -281,8 +281,8 @@ impl System {
             // Across FMI versions and widths: Real to Float64 or Float32, any integer to any
             // integer (a value that does not fit the input fails the run, naming it), an
             // enumeration to an enumeration only.
-            let same_class = src.base.access() == dst.base.access()
-                && (src.base == BaseType::Enumeration) == (dst.base == BaseType::Enumeration);
+            let same_class =
+                src.base.access() == dst.base.access() && (src.base == BaseType::Enumeration) == (dst.base == BaseType::Enumeration);
             if !same_class {
                 return Err(MasterError::new(format!(
                     "type mismatch: {fu}.{fv} is {:?}, {tu}.{tv} is {:?} (reals connect to reals, integers to integers, enumerations, Booleans and strings to their own)",

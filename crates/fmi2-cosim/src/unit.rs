@@ -60,10 +60,11 @@ pub(crate) enum Stepped {
 /// The instance behind a unit, of either version. The master passes values in four access
 /// classes ([`BaseType::access`]): f64, i64, Boolean as 0/1 and strings; FMI 3.0 units
 /// dispatch each value reference to its own type's function.
+// Both boxed: the fmi crate's instances are large and of different sizes.
 enum Instance {
-    V2(Fmi2Instance),
+    V2(Box<Fmi2Instance>),
     V3 {
-        instance: Fmi3Instance,
+        instance: Box<Fmi3Instance>,
         /// Value reference → type.
         types: HashMap<u32, BaseType>,
     },
@@ -107,7 +108,7 @@ impl Unit {
                 );
                 let import = Fmi2Import::new(dir, &description).map_err(loading)?;
                 let instance = import.instantiate_cs(&plan.name, false, false).map_err(|e| instantiation(e, "fmi2Instantiate"))?;
-                (Instance::V2(instance), Box::new(import) as Box<dyn std::any::Any>)
+                (Instance::V2(Box::new(instance)), Box::new(import) as Box<dyn std::any::Any>)
             }
             FmiVersion::V3 => {
                 let description = format!(
@@ -115,10 +116,11 @@ impl Unit {
                 );
                 let import = Fmi3Import::new(dir, &description).map_err(loading)?;
                 // No event mode, no early return, no intermediate update: plain Co-Simulation.
-                let instance =
-                    import.instantiate_cs(&plan.name, false, false, false, false, &[]).map_err(|e| instantiation(e, "fmi3InstantiateCoSimulation"))?;
+                let instance = import
+                    .instantiate_cs(&plan.name, false, false, false, false, &[])
+                    .map_err(|e| instantiation(e, "fmi3InstantiateCoSimulation"))?;
                 let types = interface.variables.iter().map(|v| (v.value_reference, v.base)).collect();
-                (Instance::V3 { instance, types }, Box::new(import) as Box<dyn std::any::Any>)
+                (Instance::V3 { instance: Box::new(instance), types }, Box::new(import) as Box<dyn std::any::Any>)
             }
         };
         Ok(Self { name: plan.name.clone(), instance, scratch: Vec::new(), _import: import })
@@ -186,7 +188,9 @@ impl Unit {
                 match instance.do_step(t, h, true, &mut event, &mut terminate, &mut early, &mut last) {
                     // A completed step that asks to end the simulation ends the run as a
                     // discarded one would: at its start, the last point recorded.
-                    Ok(_) if terminate => Ok(Stepped::Discarded(DiscardedStep { last_successful_time: Some(last), terminated: Some(true) })),
+                    Ok(_) if terminate => {
+                        Ok(Stepped::Discarded(DiscardedStep { last_successful_time: Some(last), terminated: Some(true) }))
+                    }
                     Ok(_) => Ok(Stepped::Completed),
                     Err(Fmi3Error::Discard) => {
                         Ok(Stepped::Discarded(DiscardedStep { last_successful_time: Some(last), terminated: Some(terminate) }))
@@ -272,7 +276,8 @@ impl Unit {
             Instance::V2(i) => {
                 self.scratch.clear();
                 for &x in values {
-                    let x = i32::try_from(x).map_err(|_| CallError::new("fmi2SetInteger", format_args!("not called: {x} does not fit an fmi2Integer")))?;
+                    let x = i32::try_from(x)
+                        .map_err(|_| CallError::new("fmi2SetInteger", format_args!("not called: {x} does not fit an fmi2Integer")))?;
                     self.scratch.push(x);
                 }
                 i.set_integer(vrs, &self.scratch).map(drop).map_err(|e| CallError::new("fmi2SetInteger", e))

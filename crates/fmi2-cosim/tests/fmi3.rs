@@ -89,7 +89,9 @@ fn enumerations_strings_and_booleans_cross_between_versions() {
 fn dependencies_by_value_reference_are_resolved_per_output() {
     let dir = tempfile::tempdir().unwrap();
     // As the FMI 2.0 test: a.y1 → b.u1, b.y1 → a.u2, c.y1 → c.u2 is no algebraic loop.
-    for versions in [[FmiVersion::V3; 3], [FmiVersion::V3, FmiVersion::V2, FmiVersion::V3], [FmiVersion::V2, FmiVersion::V3, FmiVersion::V2]] {
+    for versions in
+        [[FmiVersion::V3; 3], [FmiVersion::V3, FmiVersion::V2, FmiVersion::V3], [FmiVersion::V2, FmiVersion::V3, FmiVersion::V2]]
+    {
         for algorithm in [Algorithm::GaussSeidel, Algorithm::Jacobi] {
             let mut s = System::new();
             for (name, v) in ["a", "b", "c"].into_iter().zip(versions) {
@@ -188,7 +190,10 @@ fn a_mixed_system_is_written_to_ssp_with_ssp_types() {
     let mut archive = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
     let mut ssd = String::new();
     std::io::Read::read_to_string(&mut archive.by_name("SystemStructure.ssd").unwrap(), &mut ssd).unwrap();
-    assert!(!ssd.contains("ssc:Float") && !ssd.contains("ssc:Int32") && !ssd.contains("ssc:Int64"), "SSP 1.0 has no FMI 3.0 type names: {ssd}");
+    assert!(
+        !ssd.contains("ssc:Float") && !ssd.contains("ssc:Int32") && !ssd.contains("ssc:Int64"),
+        "SSP 1.0 has no FMI 3.0 type names: {ssd}"
+    );
     assert!(ssd.contains(r#"<ssd:Connector name="y" kind="output">"#), "{ssd}");
     assert!(ssd.contains("<ssc:Real/>") && ssd.contains("ssc:Enumeration"), "{ssd}");
     assert!(archive.file_names().any(|n| n.ends_with("Modes.fmi3.fmu")), "the FMI 3.0 FMU is packed");
