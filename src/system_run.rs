@@ -100,7 +100,7 @@ fn recording_csv(outcome: &RunOutcome) -> String {
             if c > 0 {
                 out.push(',');
             }
-            match outcome.column_types[c] {
+            match outcome.column_types[c].access() {
                 BaseType::Real => crate::table::push_number(&mut out, value),
                 BaseType::String => {
                     let k = string_columns.iter().position(|&s| s == c).expect("a String column");

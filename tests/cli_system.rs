@@ -151,3 +151,37 @@ fn a_reader_that_stops_early_ends_the_run_quietly() {
     assert_eq!(output.status.code(), Some(0), "{stderr}");
     assert!(!stderr.contains("error"), "{stderr}");
 }
+
+#[test]
+fn fmi3_units_write_the_same_csv_as_their_fmi2_twins() {
+    let dir = tempfile::tempdir().unwrap();
+    // Each system once with FMI 2.0 FMUs and once with their FMI 3.0 twins: Real values with
+    // fractions (a Float64 column is a Real one), integers, enumerations and strings, a
+    // discard, a last short step, and a connection from one version to the other.
+    let systems = [
+        ("Counter", "[simulation]\nstop = 10.0\nstep = 0.1\nrecord = [\"a.count\", \"a.t_last\"]\n"),
+        ("Modes", "[simulation]\nstop = 1.0\nstep = 0.3\nrecord = [\"a.y\", \"a.active\", \"a.status\", \"a.steps\"]\n"),
+        ("Hold", "[simulation]\nstop = 1.0\nstep = 0.125\nrecord = [\"a.y\", \"b.y\"]\n"),
+    ];
+    for (model, simulation) in systems {
+        let m = TestModel::named(model).unwrap();
+        fmu_in(dir.path(), m).unwrap();
+        fmi2_test_fmus::fmu3_in(dir.path(), m).unwrap();
+        let mut csv = Vec::new();
+        for (va, vb) in [("fmu", "fmu"), ("fmi3.fmu", "fmi3.fmu"), ("fmi3.fmu", "fmu")] {
+            let mut text = format!("[[fmu]]\nname = \"a\"\npath = \"{model}.{va}\"\n\n");
+            if model == "Hold" {
+                // Hold's output fed back through a second Hold of the other version.
+                text += &format!("[[fmu]]\nname = \"b\"\npath = \"{model}.{vb}\"\nparameters = {{ y = 0.25 }}\n\n");
+                text += "[[connection]]\nfrom = \"b.y\"\nto = \"a.u\"\n[[connection]]\nfrom = \"a.y\"\nto = \"b.u\"\n\n";
+            }
+            let system = write(dir.path(), &format!("{model}-{va}-{vb}.toml"), &(text + simulation));
+            let out = dir.path().join(format!("{model}-{va}-{vb}.csv"));
+            neurarm().arg("simulate").arg(&system).arg("-o").arg(&out).assert().success();
+            csv.push(std::fs::read_to_string(&out).unwrap());
+        }
+        assert!(csv[0].lines().count() > 3 && csv[0].contains('.'), "{model}: {}", csv[0]);
+        assert_eq!(csv[1], csv[0], "{model}: FMI 3.0 against FMI 2.0");
+        assert_eq!(csv[2], csv[0], "{model}: mixed against FMI 2.0");
+    }
+}
