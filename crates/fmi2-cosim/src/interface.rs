@@ -426,6 +426,7 @@ impl Interface {
         // the attribute is absent).
         let mut output_dependencies: Vec<(usize, Option<Vec<usize>>)> = Vec::new();
         // FMI 3.0: the same by value reference.
+        let mut aliases: Vec<(String, usize)> = Vec::new();
         let mut output_vr_dependencies: Vec<(u32, Option<Vec<u32>>)> = Vec::new();
         let mut is_fmi3 = false;
         let mut in_variables = false;
@@ -494,6 +495,11 @@ impl Interface {
                     if let Some(c) = current.as_mut() {
                         c.is_array = true;
                     }
+                }
+                // FMI 3.0: another name of the variable being read (same value reference).
+                Event::Start(e) | Event::Empty(e) if is_fmi3 && current.is_some() && e.name().as_ref() == b"Alias" => {
+                    let name = attribute(e.attributes(), b"name")?.ok_or("an Alias has no name")?;
+                    aliases.push((name, variables.len()));
                 }
                 Event::Start(e) | Event::Empty(e) if is_fmi3 && current.is_some() && e.name().as_ref() == b"Start" => {
                     if let Some((_, _, has_start)) = current.as_mut().and_then(|c| c.base.as_mut()) {
@@ -569,20 +575,31 @@ impl Interface {
                 return Err(format!("two variables are named '{}'", v.name));
             }
         }
-        let mut seen = std::collections::HashSet::new();
+        for (alias, index) in aliases {
+            if by_name.insert(alias.clone(), index).is_some() {
+                return Err(format!("two variables are named '{alias}' (an Alias of '{}')", variables[index].name));
+            }
+        }
+        let mut seen = HashMap::new();
         for v in &variables {
-            // FMI 3.0 value references are unique over all types.
+            // FMI 3.0 value references are unique over all types (other names are Alias
+            // elements); FMI 2.0 ones per access type, where variables of the same type that
+            // share one are aliases.
             let class = if is_fmi3 { BaseType::Real } else { v.base.access() };
-            if !seen.insert((class, v.value_reference)) {
+            if let Some(first) = seen.insert((class, v.value_reference), v.base) {
                 if is_fmi3 {
                     return Err(format!("variable '{}': value reference {} is used twice", v.name, v.value_reference));
                 }
-                return Err(format!(
-                    "variable '{}': value reference {} of type {} is used twice",
-                    v.name,
-                    v.value_reference,
-                    v.base.access().name()
-                ));
+                if first != v.base {
+                    return Err(format!(
+                        "variable '{}': value reference {} of type {} is used twice, by an {} and an {} (aliases have one type)",
+                        v.name,
+                        v.value_reference,
+                        v.base.access().name(),
+                        first.name(),
+                        v.base.name()
+                    ));
+                }
             }
             if v.base == BaseType::Enumeration {
                 let known = v.declared_type.as_ref().is_some_and(|t| enumerations.iter().any(|e| &e.name == t));
@@ -637,7 +654,7 @@ impl Interface {
         Ok(Self { fmi_version, model_identifier, guid, can_handle_variable_step, only_once_per_process, variables, enumerations, by_name })
     }
 
-    /// A variable by name.
+    /// A variable by name (or by one of its FMI 3.0 `Alias` names).
     pub fn get(&self, name: &str) -> Option<&VariableInfo> {
         self.by_name.get(name).map(|&i| &self.variables[i])
     }
@@ -773,7 +790,15 @@ mod tests {
         assert_eq!(settable, ["u", "w", "z", "mode", "on"], "inputs, parameters and the exact output; not y, the constant or c");
         // Integer and Enumeration share value references: mode (0) collides with an Integer 0.
         let e = Interface::parse(&xml.replace(r#"name="k" valueReference="1""#, r#"name="k" valueReference="0""#)).unwrap_err();
-        assert!(e.contains("value reference 0 of type Integer is used twice"), "{e}");
+        assert!(e.contains("value reference 0 of type Integer is used twice, by an Enumeration and an Integer"), "{e}");
+        // Two variables of one type sharing a value reference are aliases (FMI 2.0, 2.2.7).
+        let aliased = xml.replace(
+            r#"<ScalarVariable name="c" valueReference="5""#,
+            r#"<ScalarVariable name="z_alias" valueReference="3" causality="local" initial="calculated"><Real/></ScalarVariable>
+    <ScalarVariable name="c" valueReference="5""#,
+        );
+        let i = Interface::parse(&aliased).unwrap();
+        assert_eq!((i.get("z_alias").unwrap().value_reference, i.get("z").unwrap().value_reference), (3, 3));
         let e = Interface::parse(&xml.replace(r#"declaredType="Mode""#, r#"declaredType="Gear""#)).unwrap_err();
         assert!(e.contains("no declared type"), "{e}");
     }
@@ -842,6 +867,14 @@ mod tests {
         // Value references are unique over all types in FMI 3.0.
         let e = Interface::parse(&XML3.replace(r#"name="b_in" valueReference="27""#, r#"name="b_in" valueReference="26""#)).unwrap_err();
         assert!(e.contains("'b_in': value reference 26 is used twice"), "{e}");
+        // An Alias element is another name of its variable; names stay unique.
+        let k = r#"start="2" declaredType="Angle"/>"#;
+        let aliased = XML3.replace(k, r#"start="2" declaredType="Angle"><Alias name="k_deg" displayUnit="deg"/></Float64>"#);
+        let i = Interface::parse(&aliased).unwrap();
+        assert_eq!(i.get("k_deg"), i.get("k"));
+        assert_eq!((i.variables.len(), i.index("k_deg"), i.get("i8_in").unwrap().value_reference), (12, i.index("k"), 11));
+        let e = Interface::parse(&aliased.replace("k_deg", "n")).unwrap_err();
+        assert!(e.contains("two variables are named 'n' (an Alias of 'k')"), "{e}");
         let e = Interface::parse(
             &XML3.replace(r#"<Output valueReference="2" dependencies="1"/>"#, r#"<Output valueReference="2" dependencies="99"/>"#),
         )

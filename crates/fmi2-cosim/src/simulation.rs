@@ -65,6 +65,15 @@ pub enum RunEnd {
         /// What it logged in the call.
         log: Vec<String>,
     },
+    /// A unit completed a step and asked to end the simulation (FMI 3.0 `terminateSimulation`;
+    /// FMI 2.0 `fmi2Discard` with `fmi2Terminated` and `fmi2LastSuccessfulTime` at the step's
+    /// end): every unit finished that step, its row is recorded, and the run ended there.
+    EndRequested {
+        /// The unit that asked (the first, if several did in one step).
+        unit: String,
+        /// The end of that step [s]: where the run ended.
+        time: f64,
+    },
     /// The interrupt flag was raised; the run ended at `time` [s].
     Interrupted {
         /// The last communication point [s].
@@ -88,6 +97,8 @@ pub struct Simulation {
     on_discard: OnDiscard,
     /// Why no more steps can be taken, once a unit discarded one.
     ended: Option<MasterError>,
+    /// The unit that completed a step asking to end the simulation.
+    end_requested: Option<String>,
     interrupt: Option<Arc<AtomicBool>>,
     notices: Vec<String>,
     /// Scheduled changes, in time order ([`Simulation::schedule`]).
@@ -144,6 +155,7 @@ impl System {
             recorder,
             on_discard: OnDiscard::default(),
             ended: None,
+            end_requested: None,
             interrupt: None,
             notices: Vec::new(),
             events: Vec::new(),
@@ -440,7 +452,8 @@ impl Simulation {
         self.time = self.anchor + self.steps_taken as f64 * self.step;
         // The row of a communication point shows the values the next step uses.
         self.apply_events()?;
-        if self.steps_taken % self.recorder.every == 0 {
+        // The last row of a run a unit ends is always recorded.
+        if self.steps_taken % self.recorder.every == 0 || self.end_requested.is_some() {
             self.recorder.record(&mut self.units, self.time)?;
         }
         Ok(())
@@ -479,6 +492,10 @@ impl Simulation {
                 self.ended = Some(e.clone());
             }
         }
+        if let (Ok(()), Some(unit)) = (&result, &self.end_requested) {
+            let end = t + h;
+            self.ended = Some(MasterError::new(format!("unit '{unit}' asked to end the simulation at t = {end} s")).unit(unit).at(end));
+        }
         result
     }
 
@@ -488,6 +505,20 @@ impl Simulation {
         let call = format!("{}DoStep", unit.version().prefix());
         match unit.do_step(t, h) {
             Ok(Stepped::Completed) => Ok(()),
+            // FMI 2.0 says a step completed before the request to end through
+            // fmi2LastSuccessfulTime at the step's end (as the Reference-FMUs do).
+            Ok(Stepped::Discarded(DiscardedStep { terminated: Some(true), last_successful_time: Some(last) }))
+                if (last - (t + h)).abs() <= STEP_TOLERANCE * h =>
+            {
+                let name = unit.name.clone();
+                self.end_requested.get_or_insert(name);
+                Ok(())
+            }
+            Ok(Stepped::CompletedEnding) => {
+                let name = unit.name.clone();
+                self.end_requested.get_or_insert(name);
+                Ok(())
+            }
             Ok(Stepped::Discarded(status)) => {
                 let mut e = unit.fail(crate::unit::CallError { call: call.clone(), status: "Discard".into() }, mark, Some(t));
                 e.message = match (status.terminated, status.last_successful_time) {
@@ -538,6 +569,14 @@ impl Simulation {
                 })
             };
             match outcome {
+                Ok(()) if self.end_requested.is_some() => {
+                    let unit = self.end_requested.clone().expect("checked");
+                    self.notices.push(format!(
+                        "unit '{unit}' completed the step to t = {} s and asks to end the simulation; the run ends there",
+                        self.time
+                    ));
+                    return Ok(RunEnd::EndRequested { unit, time: self.time });
+                }
                 Ok(()) => {}
                 Err(e) if e.discard.is_some() && self.on_discard == OnDiscard::Stop => {
                     let unit = e.unit.clone().unwrap_or_default();

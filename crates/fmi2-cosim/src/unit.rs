@@ -53,6 +53,9 @@ impl CallError {
 /// How a step ended that did not fail.
 pub(crate) enum Stepped {
     Completed,
+    /// The step completed (its outputs are valid at its end) and the unit asks to end the
+    /// simulation (FMI 3.0 `terminateSimulation` with `fmi3OK`).
+    CompletedEnding,
     /// The unit discarded the step or asked to end the simulation.
     Discarded(DiscardedStep),
 }
@@ -186,11 +189,7 @@ impl Unit {
             Instance::V3 { instance, .. } => {
                 let (mut event, mut terminate, mut early, mut last) = (false, false, false, t);
                 match instance.do_step(t, h, true, &mut event, &mut terminate, &mut early, &mut last) {
-                    // A completed step that asks to end the simulation ends the run as a
-                    // discarded one would: at its start, the last point recorded.
-                    Ok(_) if terminate => {
-                        Ok(Stepped::Discarded(DiscardedStep { last_successful_time: Some(last), terminated: Some(true) }))
-                    }
+                    Ok(_) if terminate => Ok(Stepped::CompletedEnding),
                     Ok(_) => Ok(Stepped::Completed),
                     Err(Fmi3Error::Discard) => {
                         Ok(Stepped::Discarded(DiscardedStep { last_successful_time: Some(last), terminated: Some(terminate) }))
