@@ -139,6 +139,35 @@ fn an_fmi3_unit_that_asks_to_end_ends_the_run_with_its_reason() {
 }
 
 #[test]
+fn a_unit_that_takes_its_last_step_and_asks_to_end_ends_the_run_after_that_step() {
+    // The counter takes the step to 8.8 s and asks to end there (FMI 3.0: fmi3OK with
+    // terminateSimulation; FMI 2.0: fmi2Discard with fmi2LastSuccessfulTime 8.8). A second
+    // counter stepped after it in the sweep still takes that step, and its row is recorded
+    // even where record_every would skip it.
+    let dir = tempfile::tempdir().unwrap();
+    for (first, second) in [(FmiVersion::V2, FmiVersion::V3), (FmiVersion::V3, FmiVersion::V2), (FmiVersion::V3, FmiVersion::V3)] {
+        for algorithm in [Algorithm::GaussSeidel, Algorithm::Jacobi] {
+            let mut s = System::new();
+            s.add_fmu("a", &fmu(dir.path(), TestModel::Counter, first)).unwrap();
+            s.add_fmu("b", &fmu(dir.path(), TestModel::Counter, second)).unwrap();
+            s.set("a", "finish", Value::Boolean(true)).unwrap().set("b", "stop_at", Value::Real(100.0)).unwrap();
+            let mut sim = s.initialize(0.0, 0.1, algorithm, &names(&["a.count", "b.count", "a.t_last"])).unwrap();
+            sim.record_every(3);
+            let end = sim.run_until(10.0).unwrap();
+            let RunEnd::EndRequested { unit, time } = end else { panic!("{first:?}/{second:?}: expected an end request, got {end:?}") };
+            assert_eq!(unit, "a");
+            assert!((time - 8.8).abs() < 1e-9, "ended at {time}");
+            let last = sim.rows().last().unwrap().clone();
+            assert_eq!((last[1], last[2]), (88.0, 88.0), "{first:?}/{second:?} {algorithm:?}: both units took the last step");
+            assert!((last[0] - 8.8).abs() < 1e-9 && (last[3] - 8.8).abs() < 1e-12, "{last:?}");
+            assert!(sim.notices().iter().any(|n| n.contains("unit 'a' completed the step to t = 8.8") && n.contains("asks to end")));
+            let e = sim.step().unwrap_err().to_string();
+            assert!(e.contains("asked to end the simulation at t = 8.8"), "{e}");
+        }
+    }
+}
+
+#[test]
 fn an_fmi3_unit_that_cannot_vary_its_step_and_start_values_are_honoured() {
     let dir = tempfile::tempdir().unwrap();
     let mut s = System::new();

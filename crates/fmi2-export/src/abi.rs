@@ -5,17 +5,18 @@
 //! The functions are public for that macro (and for tests that drive an instance through the
 //! C ABI without a shared library); a model author calls none of them.
 
-use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::ffi::{c_char, c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 
-use crate::instance::{Function, Instance, LogSink, Phase, Snapshot, Status};
+use crate::instance::{Function, Instance, LogSink, Phase, Status};
 use crate::model::ModelFactory;
+use crate::raw::{self, slice, slice_mut, str_arg};
 
 /// `fmi2Component`.
 pub type Component = *mut c_void;
 /// `fmi2FMUstate`.
-pub type FmuState = *mut c_void;
+pub use crate::raw::FmuState;
 /// `fmi2CallbackLogger`: printf-style and variadic.
 pub type Logger = unsafe extern "C" fn(*mut c_void, *const c_char, c_int, *const c_char, *const c_char, ...);
 
@@ -70,35 +71,8 @@ pub struct Wrapper {
     strings: Vec<CString>,
 }
 
-/// SAFETY (for all functions below): the host passes pointers as the FMI 2.0 standard
-/// describes them; arrays have the lengths given with them.
-unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
-    if p.is_null() {
-        None
-    } else {
-        unsafe { CStr::from_ptr(p) }.to_str().ok()
-    }
-}
-
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    if n == 0 {
-        Some(&[])
-    } else if p.is_null() {
-        None
-    } else {
-        Some(unsafe { std::slice::from_raw_parts(p, n) })
-    }
-}
-
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    if n == 0 {
-        Some(&mut [])
-    } else if p.is_null() {
-        None
-    } else {
-        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
-    }
-}
+// SAFETY (for all functions below): the host passes pointers as the FMI 2.0 standard
+// describes them; arrays have the lengths given with them.
 
 /// Runs `body` on the instance behind `c`, turning a panic into `fmi2Fatal`.
 unsafe fn with(c: Component, name: &str, body: impl FnOnce(&mut Wrapper) -> Status) -> RawStatus {
@@ -401,62 +375,23 @@ pub unsafe fn set_string(c: Component, vr: *const u32, n: usize, value: *const *
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi2GetFMUstate", |w| {
-            if state.is_null() {
-                return null_argument(w, "fmi2GetFMUstate", "FMUstate");
-            }
-            match w.instance.get_state() {
-                Ok(snap) => {
-                    store_state(state, snap);
-                    Status::Ok
-                }
-                Err(s) => s,
-            }
-        })
-    }
-}
-
-unsafe fn store_state(state: *mut FmuState, snap: Snapshot) {
-    unsafe {
-        if (*state).is_null() {
-            *state = Box::into_raw(Box::new(snap)) as FmuState;
-        } else {
-            *(*state as *mut Snapshot) = snap;
-        }
-    }
+    unsafe { with(c, "fmi2GetFMUstate", |w| raw::get_fmu_state(&mut w.instance, state)) }
 }
 
 /// `fmi2SetFMUstate`.
 ///
 /// # Safety
-/// Arguments as in the FMI 2.0 standard.
+/// Arguments as in the FMI 2.0 standard: `state` from this FMU.
 pub unsafe fn set_fmu_state(c: Component, state: FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi2SetFMUstate", |w| match (state as *const Snapshot).as_ref() {
-            Some(snap) => w.instance.set_state(snap),
-            None => null_argument(w, "fmi2SetFMUstate", "FMUstate"),
-        })
-    }
+    unsafe { with(c, "fmi2SetFMUstate", |w| raw::set_fmu_state(&mut w.instance, state)) }
 }
 
-/// `fmi2FreeFMUstate`.
+/// `fmi2FreeFMUstate`: frees `*state` and sets it to NULL.
 ///
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn free_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi2FreeFMUstate", |w| {
-            if let Err(s) = w.instance.check_phase("fmi2FreeFMUstate", Function::FmuState) {
-                return s;
-            }
-            if !state.is_null() && !(*state).is_null() {
-                drop(Box::from_raw(*state as *mut Snapshot));
-                *state = std::ptr::null_mut();
-            }
-            Status::Ok
-        })
-    }
+    unsafe { with(c, "fmi2FreeFMUstate", |w| raw::free_fmu_state(&mut w.instance, state)) }
 }
 
 /// `fmi2SerializedFMUstateSize`.
@@ -464,57 +399,23 @@ pub unsafe fn free_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn serialized_fmu_state_size(c: Component, state: FmuState, size: *mut usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi2SerializedFMUstateSize", |w| match ((state as *const Snapshot).as_ref(), size.is_null()) {
-            (Some(snap), false) => match w.instance.serialize(snap) {
-                Ok(bytes) => {
-                    *size = bytes.len();
-                    Status::Ok
-                }
-                Err(s) => s,
-            },
-            _ => null_argument(w, "fmi2SerializedFMUstateSize", "FMUstate or size"),
-        })
-    }
+    unsafe { with(c, "fmi2SerializedFMUstateSize", |w| raw::serialized_fmu_state_size(&mut w.instance, state, size)) }
 }
 
-/// `fmi2SerializeFMUstate`: `size` must be the one `fmi2SerializedFMUstateSize` gave.
+/// `fmi2SerializeFMUstate`: `size` must be what `fmi2SerializedFMUstateSize` said.
 ///
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn serialize_fmu_state(c: Component, state: FmuState, out: *mut u8, size: usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi2SerializeFMUstate", |w| match ((state as *const Snapshot).as_ref(), slice_mut(out, size)) {
-            (Some(snap), Some(out)) => match w.instance.serialize(snap) {
-                Ok(bytes) if bytes.len() == out.len() => {
-                    out.copy_from_slice(&bytes);
-                    Status::Ok
-                }
-                Ok(bytes) => w.instance.error(&format!("fmi2SerializeFMUstate: size {size} given, the state needs {} bytes", bytes.len())),
-                Err(s) => s,
-            },
-            _ => null_argument(w, "fmi2SerializeFMUstate", "FMUstate or serializedState"),
-        })
-    }
+    unsafe { with(c, "fmi2SerializeFMUstate", |w| raw::serialize_fmu_state(&mut w.instance, state, out, size)) }
 }
 
-/// `fmi2DeSerializeFMUstate`.
+/// `fmi2DeSerializeFMUstate`: a truncated, altered or foreign buffer is refused.
 ///
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn deserialize_fmu_state(c: Component, bytes: *const u8, size: usize, state: *mut FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi2DeSerializeFMUstate", |w| match (slice(bytes, size), state.is_null()) {
-            (Some(bytes), false) => match w.instance.deserialize(bytes) {
-                Ok(snap) => {
-                    store_state(state, snap);
-                    Status::Ok
-                }
-                Err(s) => s,
-            },
-            _ => null_argument(w, "fmi2DeSerializeFMUstate", "serializedState or FMUstate"),
-        })
-    }
+    unsafe { with(c, "fmi2DeSerializeFMUstate", |w| raw::deserialize_fmu_state(&mut w.instance, bytes, size, state)) }
 }
 
 /// `fmi2DoStep`.

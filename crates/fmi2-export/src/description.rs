@@ -87,6 +87,31 @@ pub struct Unit {
 /// Names of the SI base units in [`Unit::exponents`] order, as `BaseUnit` attributes.
 pub const BASE_UNITS: [&str; 8] = ["kg", "m", "s", "A", "K", "mol", "cd", "rad"];
 
+/// Writes the `UnitDefinitions` element of `units` (nothing for none), the same in FMI 2.0
+/// and FMI 3.0: a `Unit` each with its `BaseUnit` exponents, factor and offset.
+pub fn write_unit_definitions(w: &mut Writer<Cursor<Vec<u8>>>, units: &[&Unit]) {
+    let ok = "writing XML to memory cannot fail";
+    if units.is_empty() {
+        return;
+    }
+    w.write_event(Event::Start(BytesStart::new("UnitDefinitions"))).expect(ok);
+    for u in units {
+        w.write_event(Event::Start(BytesStart::new("Unit").with_attributes([("name", u.name)]))).expect(ok);
+        let mut attributes: Vec<(&str, String)> =
+            BASE_UNITS.iter().zip(u.exponents()).filter(|(_, e)| *e != 0).map(|(n, e)| (*n, e.to_string())).collect();
+        if u.factor != 1.0 {
+            attributes.push(("factor", u.factor.to_string()));
+        }
+        if u.offset != 0.0 {
+            attributes.push(("offset", u.offset.to_string()));
+        }
+        let base = BytesStart::new("BaseUnit").with_attributes(attributes.iter().map(|(n, e)| (*n, e.as_str())));
+        w.write_event(Event::Empty(base)).expect(ok);
+        w.write_event(Event::End(BytesEnd::new("Unit"))).expect(ok);
+    }
+    w.write_event(Event::End(BytesEnd::new("UnitDefinitions"))).expect(ok);
+}
+
 impl Unit {
     /// The second, the unit of time.
     pub const SECOND: Unit = Unit::new("s").s(1);
@@ -585,25 +610,7 @@ impl ModelDescription {
         ])))
         .expect(ok);
 
-        let units = self.units();
-        if !units.is_empty() {
-            w.write_event(Event::Start(BytesStart::new("UnitDefinitions"))).expect(ok);
-            for u in units {
-                w.write_event(Event::Start(BytesStart::new("Unit").with_attributes([("name", u.name)]))).expect(ok);
-                let mut attributes: Vec<(&str, String)> =
-                    BASE_UNITS.iter().zip(u.exponents).filter(|(_, e)| *e != 0).map(|(n, e)| (*n, e.to_string())).collect();
-                if u.factor != 1.0 {
-                    attributes.push(("factor", u.factor.to_string()));
-                }
-                if u.offset != 0.0 {
-                    attributes.push(("offset", u.offset.to_string()));
-                }
-                let base = BytesStart::new("BaseUnit").with_attributes(attributes.iter().map(|(n, e)| (*n, e.as_str())));
-                w.write_event(Event::Empty(base)).expect(ok);
-                w.write_event(Event::End(BytesEnd::new("Unit"))).expect(ok);
-            }
-            w.write_event(Event::End(BytesEnd::new("UnitDefinitions"))).expect(ok);
-        }
+        write_unit_definitions(&mut w, &self.units());
 
         let enumerations = self.enumeration_types();
         if !enumerations.is_empty() {

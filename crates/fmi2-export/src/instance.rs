@@ -739,6 +739,23 @@ impl Instance {
                 Status::Ok
             }
             Err(e) => match e.discarded() {
+                Some(Discard::Finish) => {
+                    // The step was taken: the time moves to its end, the last successful one.
+                    if let Some(why) = self.non_finite_real() {
+                        self.phase = Phase::Error;
+                        return self.error(&format!("{} at t = {current} s: {why}", self.api.name("fmi2DoStep")));
+                    }
+                    self.time = current + step;
+                    self.dirty = false;
+                    self.phase = Phase::StepFailed;
+                    self.terminated = true;
+                    (self.log)(
+                        Status::Discard,
+                        "logStatusWarning",
+                        &format!("{} to t = {} s: the model asks to end the simulation: {e}", self.api.name("fmi2DoStep"), self.time),
+                    );
+                    Status::Discard
+                }
                 Some(kind) => {
                     // Nothing of the step was done: the time stays at its start, which is
                     // the last successful time.

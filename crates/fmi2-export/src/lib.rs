@@ -126,6 +126,7 @@ pub mod instance;
 pub mod model;
 #[cfg(feature = "package")]
 pub mod package;
+pub mod raw;
 pub mod table;
 pub mod uri;
 

@@ -97,6 +97,8 @@ pub enum Discard {
     Retry,
     /// The model asks to end the simulation (`fmi2Terminated` reads true).
     Terminate,
+    /// The step was taken in full and the model asks to end the simulation at its end.
+    Finish,
 }
 
 impl ModelError {
@@ -117,6 +119,15 @@ impl ModelError {
     /// `fmi2LastSuccessfulTime` is the step's start and `fmi2Terminated` true.
     pub fn terminate(message: impl fmt::Display) -> Self {
         Self { error: message.to_string().into(), discard: Some(Discard::Terminate) }
+    }
+
+    /// From [`Model::do_step`] after taking the whole step (outputs written): the model asks
+    /// to end the simulation at the step's end (it reached its own end, as a replayed log
+    /// does). FMI 2.0: `fmi2DoStep` returns `fmi2Discard` with `fmi2LastSuccessfulTime` the
+    /// step's end and `fmi2Terminated` true (the Reference-FMUs' convention); FMI 3.0:
+    /// `fmi3OK` with `terminateSimulation`.
+    pub fn finish(message: impl fmt::Display) -> Self {
+        Self { error: message.to_string().into(), discard: Some(Discard::Finish) }
     }
 
     /// Whether this is a discarded step rather than a failure, and of which kind.
@@ -167,8 +178,9 @@ pub trait Model: Send {
 
     /// Advances from `time` by `step` [s] with the inputs in `values`, writing the outputs.
     /// A step the model cannot or will not take returns [`ModelError::discard`] or
-    /// [`ModelError::terminate`] (`fmi2Discard`) and leaves the state as it was; any other
-    /// error is a failure (`fmi2Error`).
+    /// [`ModelError::terminate`] (`fmi2Discard`) and leaves the state as it was; a step taken
+    /// after which the model asks to end returns [`ModelError::finish`]; any other error is a
+    /// failure (`fmi2Error`).
     fn do_step(&mut self, values: &mut Values, time: f64, step: f64) -> Result<(), ModelError>;
 
     /// The simulation ends (`fmi2Terminate`): a model may hand over what it made (write a

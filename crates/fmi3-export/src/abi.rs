@@ -11,11 +11,12 @@
 //!
 //! The functions are public for that macro and for tests; a model author calls none of them.
 
-use std::ffi::{c_char, c_int, c_void, CStr, CString};
+use std::ffi::{c_char, c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 
-use fmi2_export::instance::{Api, Function, Instance, LogSink, Phase, Snapshot, Status};
+use fmi2_export::instance::{Api, Function, Instance, LogSink, Phase, Status};
+use fmi2_export::raw::{self, slice, slice_mut, str_arg};
 use fmi2_export::ModelFactory;
 
 use crate::description::{Fmi3Type, Fmi3Variables};
@@ -23,7 +24,7 @@ use crate::description::{Fmi3Type, Fmi3Variables};
 /// `fmi3Instance`.
 pub type Fmi3Instance = *mut c_void;
 /// `fmi3FMUState`.
-pub type FmuState = *mut c_void;
+pub use fmi2_export::raw::FmuState;
 /// `fmi3Status` as the C API returns it (the values of [`Status`], without `Pending`).
 pub type RawStatus = c_int;
 /// `fmi3LogMessageCallback`: not variadic in FMI 3.0, the message is plain text.
@@ -91,35 +92,8 @@ impl Wrapper {
     }
 }
 
-/// SAFETY (for all functions below): the host passes pointers as the FMI 3.0 standard
-/// describes them; arrays have the lengths given with them.
-unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
-    if p.is_null() {
-        None
-    } else {
-        unsafe { CStr::from_ptr(p) }.to_str().ok()
-    }
-}
-
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    if n == 0 {
-        Some(&[])
-    } else if p.is_null() {
-        None
-    } else {
-        Some(unsafe { std::slice::from_raw_parts(p, n) })
-    }
-}
-
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    if n == 0 {
-        Some(&mut [])
-    } else if p.is_null() {
-        None
-    } else {
-        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
-    }
-}
+// SAFETY (for all functions below): the host passes pointers as the FMI 3.0 standard
+// describes them; arrays have the lengths given with them.
 
 fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
     panic
@@ -302,22 +276,60 @@ simple! {
     reset => reset, "fmi3Reset";
 }
 
+/// The part every `fmi3Get<Type>` shares: the arrays from their pointers, the value
+/// references checked against `ty` and translated into `w.scratch`, then `read` fills `out`.
+#[allow(clippy::too_many_arguments)] // the C arguments, and what differs per type
+unsafe fn get_values<T>(
+    c: Fmi3Instance,
+    function: &str,
+    ty: Fmi3Type,
+    vr: *const u32,
+    n: usize,
+    values: *mut T,
+    n_values: usize,
+    read: impl FnOnce(&mut Wrapper, &mut [T]) -> Status,
+) -> RawStatus {
+    unsafe {
+        with(c, function, |w| match (slice(vr, n), slice_mut(values, n_values)) {
+            (Some(vr), Some(out)) => match w.translate(function, ty, vr, out.len()) {
+                Ok(()) => read(w, out),
+                Err(s) => s,
+            },
+            _ => null_argument(w, function, "valueReferences[] or values[]"),
+        })
+    }
+}
+
+/// As [`get_values`] for `fmi3Set<Type>`: `write` gets the host's value references (for
+/// messages) and values.
+#[allow(clippy::too_many_arguments)] // the C arguments, and what differs per type
+unsafe fn set_values<T>(
+    c: Fmi3Instance,
+    function: &str,
+    ty: Fmi3Type,
+    vr: *const u32,
+    n: usize,
+    values: *const T,
+    n_values: usize,
+    write: impl FnOnce(&mut Wrapper, &[u32], &[T]) -> Status,
+) -> RawStatus {
+    unsafe {
+        with(c, function, |w| match (slice(vr, n), slice(values, n_values)) {
+            (Some(vr), Some(v)) => match w.translate(function, ty, vr, v.len()) {
+                Ok(()) => write(w, vr, v),
+                Err(s) => s,
+            },
+            _ => null_argument(w, function, "valueReferences[] or values[]"),
+        })
+    }
+}
+
 /// `fmi3GetFloat64`.
 ///
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut f64, n_values: usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi3GetFloat64", |w| match (slice(vr, n), slice_mut(values, n_values)) {
-            (Some(vr), Some(out)) => {
-                if let Err(s) = w.translate("fmi3GetFloat64", Fmi3Type::Float64, vr, out.len()) {
-                    return s;
-                }
-                w.instance.get_real(&w.scratch, out)
-            }
-            _ => null_argument(w, "fmi3GetFloat64", "valueReferences[] or values[]"),
-        })
-    }
+    unsafe { get_values(c, "fmi3GetFloat64", Fmi3Type::Float64, vr, n, values, n_values, |w, out| w.instance.get_real(&w.scratch, out)) }
 }
 
 /// `fmi3SetFloat64`: NaN and infinities are refused, nothing set.
@@ -325,17 +337,7 @@ pub unsafe fn get_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mu
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *const f64, n_values: usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi3SetFloat64", |w| match (slice(vr, n), slice(values, n_values)) {
-            (Some(vr), Some(v)) => {
-                if let Err(s) = w.translate("fmi3SetFloat64", Fmi3Type::Float64, vr, v.len()) {
-                    return s;
-                }
-                w.instance.set_real(&w.scratch, v)
-            }
-            _ => null_argument(w, "fmi3SetFloat64", "valueReferences[] or values[]"),
-        })
-    }
+    unsafe { set_values(c, "fmi3SetFloat64", Fmi3Type::Float64, vr, n, values, n_values, |w, _, v| w.instance.set_real(&w.scratch, v)) }
 }
 
 /// `fmi3GetInt32`.
@@ -343,17 +345,7 @@ pub unsafe fn set_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *co
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut i32, n_values: usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi3GetInt32", |w| match (slice(vr, n), slice_mut(values, n_values)) {
-            (Some(vr), Some(out)) => {
-                if let Err(s) = w.translate("fmi3GetInt32", Fmi3Type::Int32, vr, out.len()) {
-                    return s;
-                }
-                w.instance.get_integer(&w.scratch, out)
-            }
-            _ => null_argument(w, "fmi3GetInt32", "valueReferences[] or values[]"),
-        })
-    }
+    unsafe { get_values(c, "fmi3GetInt32", Fmi3Type::Int32, vr, n, values, n_values, |w, out| w.instance.get_integer(&w.scratch, out)) }
 }
 
 /// `fmi3SetInt32`.
@@ -361,17 +353,7 @@ pub unsafe fn get_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut 
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *const i32, n_values: usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi3SetInt32", |w| match (slice(vr, n), slice(values, n_values)) {
-            (Some(vr), Some(v)) => {
-                if let Err(s) = w.translate("fmi3SetInt32", Fmi3Type::Int32, vr, v.len()) {
-                    return s;
-                }
-                w.instance.set_integer(&w.scratch, v)
-            }
-            _ => null_argument(w, "fmi3SetInt32", "valueReferences[] or values[]"),
-        })
-    }
+    unsafe { set_values(c, "fmi3SetInt32", Fmi3Type::Int32, vr, n, values, n_values, |w, _, v| w.instance.set_integer(&w.scratch, v)) }
 }
 
 /// `fmi3GetInt64`: the enumeration variables.
@@ -380,21 +362,15 @@ pub unsafe fn set_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *cons
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut i64, n_values: usize) -> RawStatus {
     unsafe {
-        with(c, "fmi3GetInt64", |w| match (slice(vr, n), slice_mut(values, n_values)) {
-            (Some(vr), Some(out)) => {
-                if let Err(s) = w.translate("fmi3GetInt64", Fmi3Type::Enumeration, vr, out.len()) {
-                    return s;
+        get_values(c, "fmi3GetInt64", Fmi3Type::Enumeration, vr, n, values, n_values, |w, out| {
+            let mut narrow = vec![0i32; out.len()];
+            let s = w.instance.get_integer(&w.scratch, &mut narrow);
+            if s == Status::Ok {
+                for (o, v) in out.iter_mut().zip(narrow) {
+                    *o = i64::from(v);
                 }
-                let mut narrow = vec![0i32; out.len()];
-                let s = w.instance.get_integer(&w.scratch, &mut narrow);
-                if s == Status::Ok {
-                    for (o, v) in out.iter_mut().zip(narrow) {
-                        *o = i64::from(v);
-                    }
-                }
-                s
             }
-            _ => null_argument(w, "fmi3GetInt64", "valueReferences[] or values[]"),
+            s
         })
     }
 }
@@ -405,24 +381,18 @@ pub unsafe fn get_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut 
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *const i64, n_values: usize) -> RawStatus {
     unsafe {
-        with(c, "fmi3SetInt64", |w| match (slice(vr, n), slice(values, n_values)) {
-            (Some(vr), Some(v)) => {
-                if let Err(s) = w.translate("fmi3SetInt64", Fmi3Type::Enumeration, vr, v.len()) {
-                    return s;
-                }
-                let mut narrow = Vec::with_capacity(v.len());
-                for (&x, &r) in v.iter().zip(vr) {
-                    match i32::try_from(x) {
-                        Ok(x) => narrow.push(x),
-                        Err(_) => {
-                            let name = &w.instance.description().variables[r as usize].name;
-                            return w.instance.error(&format!("fmi3SetInt64: {x} is not an item of '{name}'; nothing was set"));
-                        }
+        set_values(c, "fmi3SetInt64", Fmi3Type::Enumeration, vr, n, values, n_values, |w, vr, v| {
+            let mut narrow = Vec::with_capacity(v.len());
+            for (&x, &r) in v.iter().zip(vr) {
+                match i32::try_from(x) {
+                    Ok(x) => narrow.push(x),
+                    Err(_) => {
+                        let name = &w.instance.description().variables[r as usize].name;
+                        return w.instance.error(&format!("fmi3SetInt64: {x} is not an item of '{name}'; nothing was set"));
                     }
                 }
-                w.instance.set_integer(&w.scratch, &narrow)
             }
-            _ => null_argument(w, "fmi3SetInt64", "valueReferences[] or values[]"),
+            w.instance.set_integer(&w.scratch, &narrow)
         })
     }
 }
@@ -432,17 +402,7 @@ pub unsafe fn set_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *cons
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut bool, n_values: usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi3GetBoolean", |w| match (slice(vr, n), slice_mut(values, n_values)) {
-            (Some(vr), Some(out)) => {
-                if let Err(s) = w.translate("fmi3GetBoolean", Fmi3Type::Boolean, vr, out.len()) {
-                    return s;
-                }
-                w.instance.get_boolean(&w.scratch, out)
-            }
-            _ => null_argument(w, "fmi3GetBoolean", "valueReferences[] or values[]"),
-        })
-    }
+    unsafe { get_values(c, "fmi3GetBoolean", Fmi3Type::Boolean, vr, n, values, n_values, |w, out| w.instance.get_boolean(&w.scratch, out)) }
 }
 
 /// `fmi3SetBoolean`. Each value is read as a byte (any non-zero byte is true), so a host's
@@ -452,41 +412,29 @@ pub unsafe fn get_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *mu
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *const u8, n_values: usize) -> RawStatus {
     unsafe {
-        with(c, "fmi3SetBoolean", |w| match (slice(vr, n), slice(values, n_values)) {
-            (Some(vr), Some(v)) => {
-                if let Err(s) = w.translate("fmi3SetBoolean", Fmi3Type::Boolean, vr, v.len()) {
-                    return s;
-                }
-                let b: Vec<bool> = v.iter().map(|&x| x != 0).collect();
-                w.instance.set_boolean(&w.scratch, &b)
-            }
-            _ => null_argument(w, "fmi3SetBoolean", "valueReferences[] or values[]"),
+        set_values(c, "fmi3SetBoolean", Fmi3Type::Boolean, vr, n, values, n_values, |w, _, v| {
+            let b: Vec<bool> = v.iter().map(|&x| x != 0).collect();
+            w.instance.set_boolean(&w.scratch, &b)
         })
     }
 }
 
-/// `fmi3GetString`: the strings stay valid until the next call on the instance.
+/// `fmi3GetString`: the strings stay valid until the next call on this instance.
 ///
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut *const c_char, n_values: usize) -> RawStatus {
     unsafe {
-        with(c, "fmi3GetString", |w| match (slice(vr, n), slice_mut(values, n_values)) {
-            (Some(vr), Some(out)) => {
-                if let Err(s) = w.translate("fmi3GetString", Fmi3Type::String, vr, out.len()) {
-                    return s;
+        get_values(c, "fmi3GetString", Fmi3Type::String, vr, n, values, n_values, |w, out| {
+            let mut s = vec![String::new(); out.len()];
+            let status = w.instance.get_string(&w.scratch, &mut s);
+            if status == Status::Ok {
+                w.strings = s.into_iter().map(|x| CString::new(x.replace('\0', "")).expect("NULs removed")).collect();
+                for (o, cs) in out.iter_mut().zip(&w.strings) {
+                    *o = cs.as_ptr();
                 }
-                let mut s = vec![String::new(); out.len()];
-                let status = w.instance.get_string(&w.scratch, &mut s);
-                if status == Status::Ok {
-                    w.strings = s.into_iter().map(|x| CString::new(x.replace('\0', "")).expect("NULs removed")).collect();
-                    for (o, cs) in out.iter_mut().zip(&w.strings) {
-                        *o = cs.as_ptr();
-                    }
-                }
-                status
             }
-            _ => null_argument(w, "fmi3GetString", "valueReferences[] or values[]"),
+            status
         })
     }
 }
@@ -497,21 +445,15 @@ pub unsafe fn get_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *const *const c_char, n_values: usize) -> RawStatus {
     unsafe {
-        with(c, "fmi3SetString", |w| match (slice(vr, n), slice(values, n_values)) {
-            (Some(vr), Some(v)) => {
-                if let Err(s) = w.translate("fmi3SetString", Fmi3Type::String, vr, v.len()) {
-                    return s;
+        set_values(c, "fmi3SetString", Fmi3Type::String, vr, n, values, n_values, |w, _, v| {
+            let mut strings = Vec::with_capacity(v.len());
+            for &p in v {
+                match str_arg(p) {
+                    Some(s) => strings.push(s.to_owned()),
+                    None => return w.instance.error("fmi3SetString: a value is NULL or not UTF-8; nothing was set"),
                 }
-                let mut strings = Vec::with_capacity(v.len());
-                for &p in v {
-                    match str_arg(p) {
-                        Some(s) => strings.push(s.to_owned()),
-                        None => return w.instance.error("fmi3SetString: a value is NULL or not UTF-8; nothing was set"),
-                    }
-                }
-                w.instance.set_string(&w.scratch, &strings)
             }
-            _ => null_argument(w, "fmi3SetString", "valueReferences[] or values[]"),
+            w.instance.set_string(&w.scratch, &strings)
         })
     }
 }
@@ -544,49 +486,20 @@ pub unsafe fn no_such_type(c: Fmi3Instance, function: &str, type_name: &str, set
     }
 }
 
-/// `fmi3GetFMUState`.
+/// `fmi3GetFMUState`: a new state, or the one `*state` points to overwritten.
 ///
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi3GetFMUState", |w| {
-            if state.is_null() {
-                return null_argument(w, "fmi3GetFMUState", "FMUState");
-            }
-            match w.instance.get_state() {
-                Ok(snap) => {
-                    store_state(state, snap);
-                    Status::Ok
-                }
-                Err(s) => s,
-            }
-        })
-    }
-}
-
-unsafe fn store_state(state: *mut FmuState, snap: Snapshot) {
-    unsafe {
-        if (*state).is_null() {
-            *state = Box::into_raw(Box::new(snap)) as FmuState;
-        } else {
-            *(*state as *mut Snapshot) = snap;
-        }
-    }
+    unsafe { with(c, "fmi3GetFMUState", |w| raw::get_fmu_state(&mut w.instance, state)) }
 }
 
 /// `fmi3SetFMUState`.
 ///
 /// # Safety
-/// Arguments as in the FMI 3.0 standard: `state` from this FMU's `fmi3GetFMUState` or
-/// `fmi3DeserializeFMUState`.
+/// Arguments as in the FMI 3.0 standard: `state` from this FMU.
 pub unsafe fn set_fmu_state(c: Fmi3Instance, state: FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi3SetFMUState", |w| match (state as *const Snapshot).as_ref() {
-            Some(snap) => w.instance.set_state(snap),
-            None => null_argument(w, "fmi3SetFMUState", "FMUState"),
-        })
-    }
+    unsafe { with(c, "fmi3SetFMUState", |w| raw::set_fmu_state(&mut w.instance, state)) }
 }
 
 /// `fmi3FreeFMUState`: frees `*state` and sets it to NULL.
@@ -594,18 +507,7 @@ pub unsafe fn set_fmu_state(c: Fmi3Instance, state: FmuState) -> RawStatus {
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn free_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi3FreeFMUState", |w| {
-            if let Err(s) = w.instance.check_phase("fmi3FreeFMUState", Function::FmuState) {
-                return s;
-            }
-            if !state.is_null() && !(*state).is_null() {
-                drop(Box::from_raw(*state as *mut Snapshot));
-                *state = std::ptr::null_mut();
-            }
-            Status::Ok
-        })
-    }
+    unsafe { with(c, "fmi3FreeFMUState", |w| raw::free_fmu_state(&mut w.instance, state)) }
 }
 
 /// `fmi3SerializedFMUStateSize`.
@@ -613,18 +515,7 @@ pub unsafe fn free_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn serialized_fmu_state_size(c: Fmi3Instance, state: FmuState, size: *mut usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi3SerializedFMUStateSize", |w| match ((state as *const Snapshot).as_ref(), size.is_null()) {
-            (Some(snap), false) => match w.instance.serialize(snap) {
-                Ok(bytes) => {
-                    *size = bytes.len();
-                    Status::Ok
-                }
-                Err(s) => s,
-            },
-            _ => null_argument(w, "fmi3SerializedFMUStateSize", "FMUState or size"),
-        })
-    }
+    unsafe { with(c, "fmi3SerializedFMUStateSize", |w| raw::serialized_fmu_state_size(&mut w.instance, state, size)) }
 }
 
 /// `fmi3SerializeFMUState`: `size` must be what `fmi3SerializedFMUStateSize` said.
@@ -632,19 +523,7 @@ pub unsafe fn serialized_fmu_state_size(c: Fmi3Instance, state: FmuState, size: 
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn serialize_fmu_state(c: Fmi3Instance, state: FmuState, out: *mut u8, size: usize) -> RawStatus {
-    unsafe {
-        with(c, "fmi3SerializeFMUState", |w| match ((state as *const Snapshot).as_ref(), slice_mut(out, size)) {
-            (Some(snap), Some(out)) => match w.instance.serialize(snap) {
-                Ok(bytes) if bytes.len() == out.len() => {
-                    out.copy_from_slice(&bytes);
-                    Status::Ok
-                }
-                Ok(bytes) => w.instance.error(&format!("fmi3SerializeFMUState: size {size} given, the state needs {} bytes", bytes.len())),
-                Err(s) => s,
-            },
-            _ => null_argument(w, "fmi3SerializeFMUState", "FMUState or serializedState"),
-        })
-    }
+    unsafe { with(c, "fmi3SerializeFMUState", |w| raw::serialize_fmu_state(&mut w.instance, state, out, size)) }
 }
 
 /// `fmi3DeserializeFMUState`: a truncated, altered or foreign buffer is refused.
@@ -652,23 +531,13 @@ pub unsafe fn serialize_fmu_state(c: Fmi3Instance, state: FmuState, out: *mut u8
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn deserialize_fmu_state(c: Fmi3Instance, bytes: *const u8, size: usize, state: *mut FmuState) -> RawStatus {
-    unsafe {
-        with(c, "fmi3DeserializeFMUState", |w| match (slice(bytes, size), state.is_null()) {
-            (Some(bytes), false) => match w.instance.deserialize(bytes) {
-                Ok(snap) => {
-                    store_state(state, snap);
-                    Status::Ok
-                }
-                Err(s) => s,
-            },
-            _ => null_argument(w, "fmi3DeserializeFMUState", "serializedState or FMUState"),
-        })
-    }
+    unsafe { with(c, "fmi3DeserializeFMUState", |w| raw::deserialize_fmu_state(&mut w.instance, bytes, size, state)) }
 }
 
 /// `fmi3DoStep` from `current` [s] by `step` [s]. No event handling and no early return are
 /// ever needed; `terminateSimulation` is true when the model asked to end the simulation
-/// (the step returns `fmi3Discard`); `lastSuccessfulTime` is the instance's time after the call.
+/// (`fmi3Discard` if it did so at the step's start, `fmi3OK` if after taking the step);
+/// `lastSuccessfulTime` is the instance's time after the call.
 ///
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
@@ -692,9 +561,16 @@ pub unsafe fn do_step(
             let s = w.instance.do_step(current, step);
             *event_handling_needed = false;
             *early_return = false;
-            *terminate_simulation = s == Status::Discard && w.instance.terminated_status().unwrap_or(false);
+            let terminated = s == Status::Discard && w.instance.terminated_status().unwrap_or(false);
+            *terminate_simulation = terminated;
             *last_successful_time = w.instance.time();
-            s
+            // A step taken in full before the request to end (ModelError::finish) completed:
+            // fmi3OK with terminateSimulation, where FMI 2.0 can only say fmi2Discard.
+            if terminated && w.instance.time() > current {
+                Status::Ok
+            } else {
+                s
+            }
         })
     }
 }

@@ -13,7 +13,7 @@
 
 use std::io::Cursor;
 
-use fmi2_export::description::{BaseType, BASE_UNITS, LOG_CATEGORIES};
+use fmi2_export::description::{write_unit_definitions, BaseType, LOG_CATEGORIES};
 use fmi2_export::{Causality, Kind, ModelDescription};
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
@@ -126,25 +126,7 @@ pub fn to_xml(d: &ModelDescription) -> String {
     ])))
     .expect(ok);
 
-    let units = d.units();
-    if !units.is_empty() {
-        w.write_event(Event::Start(BytesStart::new("UnitDefinitions"))).expect(ok);
-        for u in units {
-            w.write_event(Event::Start(BytesStart::new("Unit").with_attributes([("name", u.name)]))).expect(ok);
-            let mut attributes: Vec<(&str, String)> =
-                BASE_UNITS.iter().zip(u.exponents()).filter(|(_, e)| *e != 0).map(|(n, e)| (*n, e.to_string())).collect();
-            if u.factor != 1.0 {
-                attributes.push(("factor", u.factor.to_string()));
-            }
-            if u.offset != 0.0 {
-                attributes.push(("offset", u.offset.to_string()));
-            }
-            let base = BytesStart::new("BaseUnit").with_attributes(attributes.iter().map(|(n, e)| (*n, e.as_str())));
-            w.write_event(Event::Empty(base)).expect(ok);
-            w.write_event(Event::End(BytesEnd::new("Unit"))).expect(ok);
-        }
-        w.write_event(Event::End(BytesEnd::new("UnitDefinitions"))).expect(ok);
-    }
+    write_unit_definitions(&mut w, &d.units());
 
     let enumerations = d.enumeration_types();
     if !enumerations.is_empty() {

@@ -104,6 +104,7 @@ struct Counter {
     t_last: RealVar,
     stop_at: RealVar,
     retry: BooleanVar,
+    finish: BooleanVar,
     steps: i32,
 }
 
@@ -114,8 +115,15 @@ impl Counter {
         let t_last = b.output("t_last", SECOND, "Time reached", &[]);
         let stop_at = b.parameter("stop_at", SECOND, 8.8, "A step from this time on is discarded");
         let retry = b.boolean("retry", Causality::Parameter, Variability::Fixed, Some(false), "Discard without asking to terminate");
+        let finish = b.boolean(
+            "finish",
+            Causality::Parameter,
+            Variability::Fixed,
+            Some(false),
+            "Take the step that reaches stop_at, then ask to end (instead of discarding the next)",
+        );
         let description = ModelDescription::new("Counter", "Counts steps; discards the step from stop_at on", b.finish())?;
-        Ok(Self { description, count, t_last, stop_at, retry, steps: 0 })
+        Ok(Self { description, count, t_last, stop_at, retry, finish, steps: 0 })
     }
 }
 
@@ -138,6 +146,10 @@ impl Model for Counter {
         self.steps += 1;
         values[self.count] = self.steps;
         values[self.t_last] = time + step;
+        let end = time + step;
+        if values[self.finish] && end >= stop_at - 1e-9 * stop_at.abs().max(1.0) {
+            return Err(ModelError::finish(format!("the counter reached {stop_at} s")));
+        }
         Ok(())
     }
     fn reset(&mut self) {

@@ -41,6 +41,27 @@ fn the_counter_discards_from_its_stop_time_and_says_whether_to_terminate() {
 }
 
 #[test]
+fn the_counter_can_take_the_step_to_its_stop_time_and_then_ask_to_end() {
+    let mut c = instance(TestModel::Counter);
+    assert_eq!(c.setup_experiment(None, 0.0, None), Status::Ok);
+    assert_eq!(c.set_real(&[2], &[0.25]), Status::Ok, "stop_at");
+    assert_eq!(c.set_boolean(&[1], &[true]), Status::Ok, "finish (Boolean value references: retry 0, finish 1)");
+    assert_eq!(c.enter_initialization_mode(), Status::Ok);
+    assert_eq!(c.exit_initialization_mode(), Status::Ok);
+    assert_eq!(c.do_step(0.0, 0.125), Status::Ok);
+    // FMI 2.0 can say a step was taken before the request to end only through a discard whose
+    // last successful time is the step's end.
+    assert_eq!(c.do_step(0.125, 0.125), Status::Discard);
+    assert_eq!((c.last_successful_time(), c.terminated_status()), (Ok(0.25), Ok(true)));
+    let (mut count, mut t_last) = ([0], [0.0]);
+    assert_eq!(c.get_integer(&[0], &mut count), Status::Ok);
+    assert_eq!(c.get_real(&[1], &mut t_last), Status::Ok);
+    assert_eq!((count, t_last), ([2], [0.25]), "the step was taken");
+    assert_eq!(c.do_step(0.25, 0.125), Status::Error, "no step after the request to end");
+    assert_eq!(c.terminate(), Status::Ok);
+}
+
+#[test]
 fn a_fixed_step_model_refuses_another_step_size() {
     let mut clock = started(TestModel::FixedStep);
     assert!(!clock.description().can_handle_variable_step);
