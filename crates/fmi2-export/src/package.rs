@@ -152,22 +152,34 @@ pub fn write_fmu(
     resources: &[(&str, Vec<u8>)],
     equations_html: &str,
 ) -> std::io::Result<()> {
+    let libraries = read_binaries(binaries)?
+        .into_iter()
+        .map(|(platform, extension, bytes)| (format!("binaries/{platform}/{}.{extension}", description.model_identifier), bytes))
+        .collect::<Vec<_>>();
+    write_archive(path, &description.to_xml(), &libraries, resources, &documentation_html(description, equations_html))
+}
+
+/// Reads each `(platform, binary)` of `binaries` (FMI 2.0 platform names) and checks it with
+/// [`check_binary`]: `(platform, library extension, bytes)` in order, or an
+/// [`std::io::ErrorKind::InvalidInput`] error naming the file for an empty list, a platform
+/// given twice or unknown, or a binary not built for its platform.
+pub fn read_binaries<'a>(binaries: &[(&'a str, &Path)]) -> std::io::Result<Vec<(&'a str, &'static str, Vec<u8>)>> {
     let invalid = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, m);
     if binaries.is_empty() {
         return Err(invalid("no platform binary to pack".into()));
     }
-    let mut libraries = Vec::with_capacity(binaries.len());
-    for (i, (platform, binary)) in binaries.iter().enumerate() {
-        if binaries[..i].iter().any(|(p, _)| p == platform) {
+    let mut read = Vec::with_capacity(binaries.len());
+    for (i, &(platform, binary)) in binaries.iter().enumerate() {
+        if binaries[..i].iter().any(|(p, _)| *p == platform) {
             return Err(invalid(format!("platform {platform} given twice")));
         }
         let extension = library_extension(platform)
             .ok_or_else(|| invalid(format!("unknown platform folder {platform:?} (known: {})", platform_names())))?;
         let bytes = std::fs::read(binary).map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", binary.display())))?;
         check_binary(platform, &bytes).map_err(|e| invalid(format!("{}: {e}", binary.display())))?;
-        libraries.push((format!("binaries/{platform}/{}.{extension}", description.model_identifier), bytes));
+        read.push((platform, extension, bytes));
     }
-    write_archive(path, &description.to_xml(), &libraries, resources, &documentation_html(description, equations_html))
+    Ok(read)
 }
 
 /// Writes an FMU archive to `path`: `model_description` as `modelDescription.xml`, each

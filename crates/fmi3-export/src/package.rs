@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-use fmi2_export::package::{check_binary, documentation_page, library_extension, write_archive};
+use fmi2_export::package::{documentation_page, read_binaries, write_archive};
 use fmi2_export::ModelDescription;
 
 /// The FMI 3.0 platform folders (section 2.5.1.2) of a library built for the FMI 2.0 platform
@@ -75,19 +75,11 @@ pub fn write_fmu(
     resources: &[(&str, Vec<u8>)],
     equations_html: &str,
 ) -> std::io::Result<()> {
-    let invalid = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidInput, m);
-    if binaries.is_empty() {
-        return Err(invalid("no platform binary to pack".into()));
-    }
     let mut libraries = Vec::new();
-    for (i, (platform, binary)) in binaries.iter().enumerate() {
-        if binaries[..i].iter().any(|(p, _)| p == platform) {
-            return Err(invalid(format!("platform {platform} given twice")));
-        }
-        let extension = library_extension(platform).ok_or_else(|| invalid(format!("unknown platform folder {platform:?}")))?;
-        let bytes = std::fs::read(binary).map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", binary.display())))?;
-        check_binary(platform, &bytes).map_err(|e| invalid(format!("{}: {e}", binary.display())))?;
-        for folder in platform_folders(platform, &bytes).map_err(|e| invalid(format!("{}: {e}", binary.display())))? {
+    for ((platform, extension, bytes), (_, binary)) in read_binaries(binaries)?.into_iter().zip(binaries) {
+        let folders = platform_folders(platform, &bytes)
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("{}: {e}", binary.display())))?;
+        for folder in folders {
             libraries.push((format!("binaries/{folder}/{}.{extension}", description.model_identifier), bytes.clone()));
         }
     }

@@ -18,15 +18,22 @@ fn started(model: TestModel) -> Instance {
     i
 }
 
+/// The Counter, initialised with its stop time at 0.25 s and the Boolean parameter `flag`
+/// (value references: retry 0, finish 1) set to `value`.
+fn counter_stopping_at_a_quarter_second(flag: u32, value: bool) -> Instance {
+    let mut c = instance(TestModel::Counter);
+    assert_eq!(c.setup_experiment(None, 0.0, None), Status::Ok);
+    assert_eq!(c.set_real(&[2], &[0.25]), Status::Ok, "stop_at (Real value references: time 0, t_last 1, stop_at 2)");
+    assert_eq!(c.set_boolean(&[flag], &[value]), Status::Ok, "Boolean parameter {flag}");
+    assert_eq!(c.enter_initialization_mode(), Status::Ok);
+    assert_eq!(c.exit_initialization_mode(), Status::Ok);
+    c
+}
+
 #[test]
 fn the_counter_discards_from_its_stop_time_and_says_whether_to_terminate() {
     for (retry, terminated) in [(false, true), (true, false)] {
-        let mut c = instance(TestModel::Counter);
-        assert_eq!(c.setup_experiment(None, 0.0, None), Status::Ok);
-        assert_eq!(c.set_real(&[2], &[0.25]), Status::Ok, "stop_at (Real value references: time 0, t_last 1, stop_at 2)");
-        assert_eq!(c.set_boolean(&[0], &[retry]), Status::Ok, "retry");
-        assert_eq!(c.enter_initialization_mode(), Status::Ok);
-        assert_eq!(c.exit_initialization_mode(), Status::Ok);
+        let mut c = counter_stopping_at_a_quarter_second(0, retry);
         assert_eq!(c.do_step(0.0, 0.125), Status::Ok);
         assert_eq!(c.do_step(0.125, 0.125), Status::Ok);
         assert_eq!(c.do_step(0.25, 0.125), Status::Discard);
@@ -42,12 +49,7 @@ fn the_counter_discards_from_its_stop_time_and_says_whether_to_terminate() {
 
 #[test]
 fn the_counter_can_take_the_step_to_its_stop_time_and_then_ask_to_end() {
-    let mut c = instance(TestModel::Counter);
-    assert_eq!(c.setup_experiment(None, 0.0, None), Status::Ok);
-    assert_eq!(c.set_real(&[2], &[0.25]), Status::Ok, "stop_at");
-    assert_eq!(c.set_boolean(&[1], &[true]), Status::Ok, "finish (Boolean value references: retry 0, finish 1)");
-    assert_eq!(c.enter_initialization_mode(), Status::Ok);
-    assert_eq!(c.exit_initialization_mode(), Status::Ok);
+    let mut c = counter_stopping_at_a_quarter_second(1, true);
     assert_eq!(c.do_step(0.0, 0.125), Status::Ok);
     // FMI 2.0 can say a step was taken before the request to end only through a discard whose
     // last successful time is the step's end.
