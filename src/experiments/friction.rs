@@ -316,23 +316,10 @@ pub fn friction_run(
     // (With constant-torque holds instead of computed torque on all joints, the speed loop and
     // the holds fought and diverged.)
     if let (true, Some(&(tau_first, v_first))) = (rigid, moving_levels.first()) {
-        let lowest = settings.bin_width.min(0.05);
-        let mut target = v_first.abs() - settings.velocity_spacing;
         let settle = (SPEED_LEVEL_SETTLE_S / settings.step).round() as usize;
         let average = (SPEED_LEVEL_AVERAGE_S / settings.step).round() as usize;
         let mut level = LevelRecord::default();
-        // Down from the first moving level by the spacing, then the two lowest speeds.
-        let mut targets = Vec::new();
-        while target >= lowest {
-            targets.push(target);
-            target -= settings.velocity_spacing;
-        }
-        for low in [2.0 * lowest, lowest] {
-            if targets.last().is_some_and(|&t| t - low > 0.5 * lowest) {
-                targets.push(low);
-            }
-        }
-        for target in targets {
+        for target in speed_level_targets(v_first.abs(), settings.velocity_spacing, settings.bin_width.min(0.05)) {
             let wanted = direction * target;
             for bandwidth in SPEED_LOOP_RAD_S {
                 level.clear();
@@ -355,6 +342,29 @@ pub fn friction_run(
     }
     run.simulated_s = sim.time();
     Ok(run)
+}
+
+/// The speeds [rad/s, magnitudes] of the rigid hold's speed-controlled levels below the first
+/// moving level at `first` [rad/s]: down from it by `spacing` [rad/s] to 2.5 × `lowest`, then
+/// 2 × `lowest` and `lowest` (both unless within half `lowest` of `first`).
+///
+/// The two lowest are taken whatever the spaced ones left: they sit where a Stribeck dip bends
+/// (0.05–0.1 rad/s), and a rule that dropped them when the last spaced speed lay close above
+/// (0.075 rad/s) or when none fitted (a first level under 0.15 rad/s) left joints with no pair
+/// below their Stribeck velocity, and nets 15–25 % off there (a random-family arm, seed 4).
+pub fn speed_level_targets(first: f64, spacing: f64, lowest: f64) -> Vec<f64> {
+    let mut targets = Vec::new();
+    let mut target = first - spacing;
+    while target >= 2.5 * lowest {
+        targets.push(target);
+        target -= spacing;
+    }
+    for low in [2.0 * lowest, lowest] {
+        if first - low > 0.5 * lowest {
+            targets.push(low);
+        }
+    }
+    targets
 }
 
 /// The narrowest step of a friction net at zero speed [rad/s]: half its width, the speed at
@@ -606,5 +616,23 @@ mod tests {
         let narrow: Vec<f64> = step_pairs(&pairs, 0.02).iter().map(|p| p.0).collect();
         assert_eq!(narrow, [0.02, -0.02]);
         assert!(step_pairs(&pairs, 0.045).is_empty());
+    }
+
+    #[test]
+    fn the_speed_held_levels_always_reach_the_two_lowest_speeds() {
+        let close = |got: Vec<f64>, want: &[f64]| {
+            assert_eq!(got.len(), want.len(), "{got:?}");
+            assert!(got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-12), "{got:?}");
+        };
+        // Seed 4's joint 3: the spaced speeds end at 0.075, 25 mrad/s above the lowest; 0.05 is
+        // still wanted (the old rule dropped it, leaving no pair under the Stribeck velocity).
+        close(speed_level_targets(0.375, 0.1, 0.05), &[0.275, 0.175, 0.1, 0.05]);
+        // No spaced speed fits under a first level of 0.128 rad/s (seed 4's joint 5): both lowest.
+        close(speed_level_targets(0.128, 0.1, 0.05), &[0.1, 0.05]);
+        // Spaced speeds stop at 2.5 × lowest, not within half a spacing of 2 × lowest.
+        close(speed_level_targets(0.43, 0.1, 0.05), &[0.33, 0.23, 0.13, 0.1, 0.05]);
+        // A first level within half the lowest of a low speed: that speed is not repeated.
+        close(speed_level_targets(0.12, 0.1, 0.05), &[0.05]);
+        close(speed_level_targets(0.07, 0.1, 0.05), &[]);
     }
 }
