@@ -311,7 +311,8 @@ pub fn friction_run(
     // level settles for 0.5 s and is then averaged over 1 s. A steady state of any P loop is a
     // point of the friction curve, so the pair is the level's mean speed and mean torque. The
     // loop holds a speed only where its gain beats the fall of friction with speed, so ω starts
-    // at 40 rad/s and is raised (160, 640) until the level stays within half its target; a
+    // at 40 rad/s and is raised (160, 640) until the level stays within half its target and
+    // within its target's bin (so levels of different targets never share a pair); a
     // stiffer loop first would put its gain × the speed noise into the torque of every level.
     // (With constant-torque holds instead of computed torque on all joints, the speed loop and
     // the holds fought and diverged.)
@@ -319,7 +320,7 @@ pub fn friction_run(
         let settle = (SPEED_LEVEL_SETTLE_S / settings.step).round() as usize;
         let average = (SPEED_LEVEL_AVERAGE_S / settings.step).round() as usize;
         let mut level = LevelRecord::default();
-        for target in speed_level_targets(v_first.abs(), settings.velocity_spacing, settings.bin_width.min(0.05)) {
+        for target in speed_level_targets(v_first.abs(), settings.velocity_spacing, settings.bin_width) {
             let wanted = direction * target;
             for bandwidth in SPEED_LOOP_RAD_S {
                 level.clear();
@@ -330,7 +331,7 @@ pub fn friction_run(
                     }
                 }
                 let mean = level.speed.iter().sum::<f64>() / level.speed.len() as f64;
-                if (mean - wanted).abs() < 0.5 * target {
+                if (mean - wanted).abs() < 0.5 * target.min(settings.bin_width) {
                     // Judged like every level: the mean torque of a P loop's steady state, less
                     // H_ff times the fitted acceleration.
                     run.levels.push(std::mem::take(&mut level));
@@ -345,22 +346,26 @@ pub fn friction_run(
 }
 
 /// The speeds [rad/s, magnitudes] of the rigid hold's speed-controlled levels below the first
-/// moving level at `first` [rad/s]: down from it by `spacing` [rad/s] to 2.5 × `lowest`, then
-/// 2 × `lowest` and `lowest` (both unless within half `lowest` of `first`).
+/// moving level at `first` [rad/s], for friction bins `bin_width` [rad/s] wide: down from it by
+/// `spacing` [rad/s] while at least 3.5 bin widths, then 2.5, 1.5 and 0.5 widths (0.125, 0.075
+/// and 0.025 rad/s for the paper's bins), each unless `first` lies in the same bin.
 ///
-/// The two lowest are taken whatever the spaced ones left: they sit where a Stribeck dip bends
-/// (0.05–0.1 rad/s), and a rule that dropped them when the last spaced speed lay close above
-/// (0.075 rad/s) or when none fitted (a first level under 0.15 rad/s) left joints with no pair
-/// below their Stribeck velocity, and nets 15–25 % off there (a random-family arm, seed 4).
-pub fn speed_level_targets(first: f64, spacing: f64, lowest: f64) -> Vec<f64> {
+/// The lowest three are taken whatever the spaced ones left: they sit where a Stribeck dip
+/// bends, and a rule that dropped them when the last spaced speed lay close above or when none
+/// fitted (a first level under 0.15 rad/s) left joints with no pair below their Stribeck
+/// velocity, and nets 15–25 % off there (a random-family arm, seed 4). They lie mid-bin, and
+/// the spaced ones stop a bin above them: levels aimed at 0.1 and about 0.14 rad/s once shared
+/// a bin, whose pair (their mean speed and mean friction) was 0.035 N·m off the law on a
+/// Stribeck dip (seed 10).
+pub fn speed_level_targets(first: f64, spacing: f64, bin_width: f64) -> Vec<f64> {
     let mut targets = Vec::new();
     let mut target = first - spacing;
-    while target >= 2.5 * lowest {
+    while target >= 3.5 * bin_width {
         targets.push(target);
         target -= spacing;
     }
-    for low in [2.0 * lowest, lowest] {
-        if first - low > 0.5 * lowest {
+    for low in [2.5 * bin_width, 1.5 * bin_width, 0.5 * bin_width] {
+        if first - low > 0.5 * bin_width {
             targets.push(low);
         }
     }
@@ -619,20 +624,30 @@ mod tests {
     }
 
     #[test]
-    fn the_speed_held_levels_always_reach_the_two_lowest_speeds() {
+    fn the_speed_held_levels_reach_the_lowest_speeds_each_in_a_bin_of_its_own() {
         let close = |got: Vec<f64>, want: &[f64]| {
             assert_eq!(got.len(), want.len(), "{got:?}");
             assert!(got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-12), "{got:?}");
         };
-        // Seed 4's joint 3: the spaced speeds end at 0.075, 25 mrad/s above the lowest; 0.05 is
-        // still wanted (the old rule dropped it, leaving no pair under the Stribeck velocity).
-        close(speed_level_targets(0.375, 0.1, 0.05), &[0.275, 0.175, 0.1, 0.05]);
-        // No spaced speed fits under a first level of 0.128 rad/s (seed 4's joint 5): both lowest.
-        close(speed_level_targets(0.128, 0.1, 0.05), &[0.1, 0.05]);
-        // Spaced speeds stop at 2.5 × lowest, not within half a spacing of 2 × lowest.
-        close(speed_level_targets(0.43, 0.1, 0.05), &[0.33, 0.23, 0.13, 0.1, 0.05]);
-        // A first level within half the lowest of a low speed: that speed is not repeated.
-        close(speed_level_targets(0.12, 0.1, 0.05), &[0.05]);
-        close(speed_level_targets(0.07, 0.1, 0.05), &[]);
+        // Seed 4's joint 3: the spaced speeds end at 0.175; the three lowest follow (the old
+        // rule dropped 0.05 after 0.075, leaving no pair under the Stribeck velocity, 0.049).
+        close(speed_level_targets(0.375, 0.1, 0.05), &[0.275, 0.175, 0.125, 0.075, 0.025]);
+        // No spaced speed fits under a first level of 0.128 rad/s (seed 4's joint 5): the two
+        // lowest (0.125 shares the first level's bin).
+        close(speed_level_targets(0.128, 0.1, 0.05), &[0.075, 0.025]);
+        // Spaced speeds stop a bin above the lowest three: 0.14 would share 0.125's bin.
+        close(speed_level_targets(0.44, 0.1, 0.05), &[0.34, 0.24, 0.125, 0.075, 0.025]);
+        close(speed_level_targets(0.151, 0.1, 0.05), &[0.125, 0.075, 0.025]);
+        close(speed_level_targets(0.04, 0.1, 0.05), &[]);
+        // Every target mid-bin, none sharing a bin with another or with the first level.
+        for first in (1..200).map(|k| k as f64 * 0.0037) {
+            let targets = speed_level_targets(first, 0.1, 0.05);
+            let mut bins: Vec<i64> = targets.iter().map(|t| (t / 0.05).floor() as i64).collect();
+            bins.push((first / 0.05).floor() as i64);
+            let count = bins.len();
+            bins.sort();
+            bins.dedup();
+            assert_eq!(bins.len(), count, "first {first}: {targets:?}");
+        }
     }
 }

@@ -286,12 +286,9 @@ pub fn judge_level(level: &Level<'_>, options: &FrictionOptions) -> LevelReport 
 
 /// Judges every level, bins the kept ones and adds the pair at rest.
 ///
-/// Each kept level enters its bin ([`bin_key`]) at its window's mean speed and friction,
-/// weighted by its samples; a bin's pair is the weighted mean. The bins are `bin_width_rad_s`
-/// wide (edges at whole multiples of the width) except at low speed, where they narrow to four
-/// an octave: one bin of 0.05 rad/s merged the levels held at 0.05 and 0.1 rad/s into a pair
-/// at their mean speed and mean friction, off the curve where a Stribeck dip bends most.
-/// Binning the samples one by one instead would bias each bin's speed towards
+/// Each kept level enters its bin (of width `bin_width_rad_s`, edges at whole multiples of the
+/// width) at its window's mean speed and friction, weighted by its samples; a bin's pair is the
+/// weighted mean. Binning the samples one by one instead would bias each bin's speed towards
 /// its edges by the noise of the speed samples (the bin's torque stays the level's), an error
 /// of slope × bias that is largest where friction changes fastest (the Stribeck dip).
 ///
@@ -303,7 +300,7 @@ pub fn identify_levels(levels: &[Level<'_>], options: &FrictionOptions) -> Frict
     let reports: Vec<LevelReport> = levels.iter().map(|l| judge_level(l, options)).collect();
     let mut bins: BTreeMap<i64, (f64, f64, usize)> = BTreeMap::new();
     for r in reports.iter().filter(|r| r.verdict == Verdict::Kept) {
-        let key = bin_key(r.speed_rad_s, options.bin_width_rad_s);
+        let key = (r.speed_rad_s / options.bin_width_rad_s).floor() as i64;
         let bin = bins.entry(key).or_insert((0.0, 0.0, 0));
         bin.0 += r.speed_rad_s * r.samples as f64;
         bin.1 += r.friction_nm * r.samples as f64;
@@ -316,37 +313,6 @@ pub fn identify_levels(levels: &[Level<'_>], options: &FrictionOptions) -> Frict
         pairs.insert(at, (0.0, rest.torque_nm, rest.levels));
     }
     FrictionIdentification { pairs, levels: reports, rest, ignored_rows: 0 }
-}
-
-/// Below this many bin widths [`bin_key`]'s bins narrow geometrically.
-pub const FINE_BINS_BELOW: f64 = 4.0;
-
-/// The bin of a level at `speed` [rad/s] among bins `width` [rad/s] wide: keys ordered as the
-/// speeds, one key for all speeds of a bin, none shared across directions.
-///
-/// Below about [`FINE_BINS_BELOW`] widths the bins span a factor 2^(1/4) of speed each,
-/// centred on width × 2^(k/4): the lowest speeds the rigid hold aims at (one and two widths)
-/// lie in the middle of their bins, so a level a few per cent off its target keeps its pair.
-pub fn bin_key(speed: f64, width: f64) -> i64 {
-    // Magnitudes from 1 up: every fine key under every coarse one, and the sign tells the
-    // directions apart.
-    const OFFSET: i64 = 1 << 40;
-    let quarter_octave = std::f64::consts::LN_2 / 4.0;
-    let fine_centre = FINE_BINS_BELOW * width;
-    let fine_top = fine_centre * (-0.5 * quarter_octave).exp();
-    let s = speed.abs();
-    let magnitude = if s >= fine_top {
-        OFFSET + (s / width).floor().min(OFFSET as f64) as i64
-    } else {
-        // −1 at the top fine bin, falling by one a bin; the floor of 1 − OFFSET takes s = 0.
-        let k = ((s / fine_centre).ln() / quarter_octave + 0.5).floor();
-        OFFSET + k.max(1.0 - OFFSET as f64) as i64
-    };
-    if speed < 0.0 {
-        -magnitude
-    } else {
-        magnitude
-    }
 }
 
 /// The pair at rest of [`identify_levels`], if both directions have probes at rest.

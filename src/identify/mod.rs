@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use crate::table::{NumericTable, TableError};
 
 pub use friction::{
-    bin_key, identify_friction_log, identify_levels, judge_level, torque_levels, FrictionCurve, FrictionIdentification, FrictionOptions,
+    identify_friction_log, identify_levels, judge_level, torque_levels, FrictionCurve, FrictionIdentification, FrictionOptions,
     FrictionPair, Level, LevelReport, RestPair, Verdict,
 };
 pub use gravity::{
@@ -236,35 +236,6 @@ mod tests {
         assert_eq!(pairs[1], (0.0, rest.torque_nm));
         assert!((pairs[2].0 - 0.515).abs() < 1e-12 && (pairs[2].1 - 1.25).abs() < 1e-12, "{pairs:?}");
         assert!((pairs[3].0 - 0.6).abs() < 1e-12);
-    }
-
-    #[test]
-    fn bins_narrow_at_low_speed_so_levels_there_keep_their_own_pairs() {
-        let time: Vec<f64> = (0..1000).map(|k| k as f64 * 1e-3).collect();
-        // Held at 0.05 and 0.1 rad/s (one bin of 0.05 rad/s merged them into one pair at 0.075)
-        // and a few per cent off those targets; 0.0125 and 0.025; both directions. 0.5 and
-        // 0.52 still share a coarse bin, and so do 0.0955 and 0.104 (within 2^(±1/8) of 0.1).
-        let data = [0.0125, 0.025, 0.048, 0.0955, 0.104, 0.5, 0.52];
-        let all: Vec<(f64, f64)> = data.iter().flat_map(|&v| [(v, 1.0 + v), (-v, -1.0 - v)]).collect();
-        let (speeds, torques): (Vec<Vec<f64>>, Vec<Vec<f64>>) = all.iter().map(|&(v, t)| (vec![v; 1000], vec![t; 1000])).unzip();
-        let levels: Vec<Level<'_>> =
-            speeds.iter().zip(&torques).map(|(s, t)| Level { time: &time, speed: s, torque: t, line: 0 }).collect();
-        let found = identify_levels(&levels, &FrictionOptions::default());
-        let speeds: Vec<f64> = found.pairs.iter().map(|p| p.0).collect();
-        let expected = [-0.51, -0.09975, -0.048, -0.025, -0.0125, 0.0125, 0.025, 0.048, 0.09975, 0.51];
-        assert_eq!(speeds.len(), expected.len(), "{speeds:?}");
-        for (s, e) in speeds.iter().zip(expected) {
-            assert!((s - e).abs() < 1e-12, "{speeds:?}");
-        }
-        // Keys follow the speeds through the fine bins, the coarse ones and both directions.
-        let grid: Vec<f64> = (-400..=400).map(|k| k as f64 * 2.5e-3).filter(|v: &f64| *v != 0.0).collect();
-        let keys: Vec<i64> = grid.iter().map(|&v| bin_key(v, 0.05)).collect();
-        assert!(keys.windows(2).all(|w| w[0] <= w[1]), "keys not ordered as speeds");
-        assert!(keys.iter().all(|&k| k != 0));
-        // Coarse above about 0.18 rad/s: 0.19 and 0.199 share a bin, 0.2 starts the next.
-        assert_eq!(bin_key(0.19, 0.05), bin_key(0.199, 0.05));
-        assert_ne!(bin_key(0.199, 0.05), bin_key(0.2, 0.05));
-        assert_ne!(bin_key(1e-300, 0.05), bin_key(-1e-300, 0.05));
     }
 
     #[test]
