@@ -311,8 +311,9 @@ pub fn friction_run(
     // level settles for 0.5 s and is then averaged over 1 s. A steady state of any P loop is a
     // point of the friction curve, so the pair is the level's mean speed and mean torque. The
     // loop holds a speed only where its gain beats the fall of friction with speed, so ω starts
-    // at 40 rad/s and is raised (160, 640) until the level stays within half its target and
-    // within its target's bin (so levels of different targets never share a pair); a
+    // at 40 rad/s and is raised (160, 640) until the level stays within half a bin width of
+    // its target (so the mid-bin lowest levels keep bins of their own), or else the closest
+    // within half its target is kept (a light distal joint held none within the bin); a
     // stiffer loop first would put its gain × the speed noise into the torque of every level.
     // (With constant-torque holds instead of computed torque on all joints, the speed loop and
     // the holds fought and diverged.)
@@ -322,6 +323,8 @@ pub fn friction_run(
         let mut level = LevelRecord::default();
         for target in speed_level_targets(v_first.abs(), settings.velocity_spacing, settings.bin_width) {
             let wanted = direction * target;
+            // The closest level within half its target, if none stays within half a bin.
+            let mut fallback: Option<(f64, LevelRecord)> = None;
             for bandwidth in SPEED_LOOP_RAD_S {
                 level.clear();
                 for k in 0..settle + average {
@@ -330,14 +333,20 @@ pub fn friction_run(
                         level.push(sim.time(), speed, torque, f64::INFINITY);
                     }
                 }
-                let mean = level.speed.iter().sum::<f64>() / level.speed.len() as f64;
-                if (mean - wanted).abs() < 0.5 * target.min(settings.bin_width) {
-                    // Judged like every level: the mean torque of a P loop's steady state, less
-                    // H_ff times the fitted acceleration.
-                    run.levels.push(std::mem::take(&mut level));
-                    run.speed_levels += 1;
+                let off = (level.speed.iter().sum::<f64>() / level.speed.len() as f64 - wanted).abs();
+                if off < 0.5 * target.min(settings.bin_width) {
+                    fallback = Some((off, std::mem::take(&mut level)));
                     break;
                 }
+                if off < 0.5 * target && fallback.as_ref().is_none_or(|(best, _)| off < *best) {
+                    fallback = Some((off, level.clone()));
+                }
+            }
+            // Judged like every level: the mean torque of a P loop's steady state, less H_ff
+            // times the fitted acceleration.
+            if let Some((_, kept)) = fallback {
+                run.levels.push(kept);
+                run.speed_levels += 1;
             }
         }
     }
