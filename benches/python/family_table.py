@@ -10,9 +10,14 @@ perfect-compensation tracking run's samples with a joint at rest (stick-slip), a
 against the true positions (the measured one carries the emulated encoders' noise), what the
 real arm's true friction law gives fed the same measured speed (perfect/none), and real NN/none
 with the sensors' noise off: a miss that the noise-free run meets while the true law on the
-measured speed does no better than the net is the sensors' limit, and is marked so. For sim
-NN/perfect: the simulated arm's true law scaled by 0.99 and by 1.01 over perfect; a miss within
-the worse of those two (a net 1 % off the law would do as badly) is marked so.
+measured speed does no better than the net is the sensors' limit, and is marked so; a miss
+where even the true law with the noise off stays above the target, and the net does no worse
+than the law with and without the noise, is beyond the arm (friction too small a part of the
+uncompensated error), and is marked so. For sim
+NN/perfect: the simulated arm's true law scaled by 0.99 and by 1.01 over perfect; a miss no
+further above 1 than the farther of those two from 1, on either side (a law 1 % off moves the
+ratio that far: upwards where the perfect run's error is tiny, either way where the arm sticks
+and slips), is marked so.
 """
 
 import argparse
@@ -78,6 +83,7 @@ def read_row(out, seed, wall_s, rc):
     sensors = r["table_1"].get("real_sensors", {})
     row["real_perfect_over_none"] = sensors.get("perfect_over_none")
     row["real_nn_over_none_quiet"] = sensors.get("quiet_nn_over_none")
+    row["real_perfect_over_none_quiet"] = sensors.get("quiet_perfect_over_none")
     law = r["table_1"].get("sim_law_sensitivity", {})
     row["sim_law_low_over_perfect"] = law.get("low_over_perfect")
     row["sim_law_high_over_perfect"] = law.get("high_over_perfect")
@@ -126,8 +132,12 @@ def verdicts(row):
     if row["sim_nn_over_perfect"] > TARGETS["sim_nn_over_perfect"]:
         low, high, err = row.get("sim_law_low_over_perfect"), row.get("sim_law_high_over_perfect"), row.get("sim_law_error")
         low_speed = row.get("worst_low_speed_share_sim")
-        if low is not None and high is not None and row["sim_nn_over_perfect"] <= max(low, high):
-            missed.append(f"sim NN/perfect (within the true law +-{100 * err:.0f} %: {low:.2f}, {high:.2f} x perfect)")
+        # How far the true law 1 % off moves the ratio from 1, either way: above 1 where the
+        # perfect run's error is tiny, on both sides where the arm sticks and slips and the MSE
+        # is chaotic in small torques (a 1 % lower law then tracked 2.7 x better, seed 5).
+        scatter = None if low is None or high is None else max(abs(low - 1), abs(high - 1))
+        if scatter is not None and row["sim_nn_over_perfect"] - 1 <= scatter:
+            missed.append(f"sim NN/perfect (within the true law +-{100 * err:.0f} %'s scatter: {low:.2f}, {high:.2f} x perfect)")
         elif None not in (low, high, low_speed, err) and low_speed > err \
                 and max(abs(low - 1), abs(high - 1)) * low_speed / err >= row["sim_nn_over_perfect"] - 1:
             # The nets are further off at low speed than the law error of the band, and the
@@ -140,10 +150,17 @@ def verdicts(row):
     little_friction = row["sim_none_over_perfect"] < TARGETS["sim_none_over_perfect"]
     if row["real_nn_over_none"] > TARGETS["real_nn_over_none"]:
         quiet, perfect = row.get("real_nn_over_none_quiet"), row.get("real_perfect_over_none")
+        quiet_law = row.get("real_perfect_over_none_quiet")
         if row["real_nn_over_none_true"] <= TARGETS["real_nn_over_none"]:
             missed.append("real NN/none (met on the true positions: the measured error's noise floor)")
         elif quiet is not None and quiet <= TARGETS["real_nn_over_none"] and perfect is not None and perfect >= row["real_nn_over_none_true"]:
             missed.append(f"real NN/none (the speed noise: met with it off; the true law on the measured speed gives {perfect:.2f} x none)")
+        elif quiet is not None and quiet_law is not None and quiet_law > TARGETS["real_nn_over_none"] and quiet <= quiet_law \
+                and perfect is not None and perfect >= row["real_nn_over_none_true"]:
+            # Even the arm's own law, noise off, leaves more than the target of the uncompensated
+            # error: friction is too small a part of it (little friction), and the net does as well.
+            missed.append(f"real NN/none (beyond the arm: its true law gives {quiet_law:.2f} x none with the noise off, "
+                          f"{perfect:.2f} x with it; the net {quiet:.2f} and {row['real_nn_over_none_true']:.2f})")
         else:
             missed.append("real NN/none")
     if row["gravity_rms_share"] >= TARGETS["gravity_rms_share"]:

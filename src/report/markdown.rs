@@ -326,7 +326,8 @@ pub fn report_markdown(run: &PaperRun) -> String {
          `FrictionHold::Rigid`), raised level by level until the speed passes {1} rad/s, each level lasting until its last 0.5 s is steady by \
          the test `neurarm identify friction` applies to logs; each level's torque corrected by the fitted \
          acceleration (friction = τ − H_ff q̈); below the first moving level, where constant torques cannot hold a Stribeck joint, \
-         speed-controlled levels down to {0} rad/s. The steady levels binned by {0} \
+         speed-controlled levels down to {6} rad/s, and more of them wherever two moving levels lie over {7} rad/s apart (friction \
+         falling with speed faster than the torque steps follow). The steady levels binned by {0} \
          rad/s at their mean speeds; mean friction per bin = one training pair, plus one at rest (0 rad/s, the midpoint of the two breakaway \
          torques; see `neurarm::identify::identify_levels`). The pairs and nets are checked against the true law of the arm they were measured on: pair error \
          is the largest |pair − law| over the moving pairs, net error the RMS of net − law over {2} ≤ |q̇| ≤ {3} rad/s, also as a share \
@@ -339,7 +340,9 @@ pub fn report_markdown(run: &PaperRun) -> String {
         0.2,
         settings.max_velocity,
         crate::experiments::LOW_SPEED_RANGE_RAD_S.0,
-        crate::experiments::LOW_SPEED_RANGE_RAD_S.1
+        crate::experiments::LOW_SPEED_RANGE_RAD_S.1,
+        0.5 * settings.bin_width,
+        2.0 * settings.velocity_spacing
     );
     let _ = writeln!(
         s,

@@ -19,6 +19,7 @@ pub fn check_friction(out: &Path, config: &ArmConfig, real: &ArmConfig, net_limi
         let law = config.arm.friction[joint];
         let text = std::fs::read_to_string(out.join(format!("data/friction_sim_joint{}.csv", joint + 1))).unwrap();
         let (mut worst, mut fastest, mut slowest) = (0.0f64, [0.0f64; 2], [f64::INFINITY; 2]);
+        let mut speeds: [Vec<f64>; 2] = Default::default();
         for line in text.lines().skip(1) {
             let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
             if v[0] == 0.0 {
@@ -28,6 +29,14 @@ pub fn check_friction(out: &Path, config: &ArmConfig, real: &ArmConfig, net_limi
             let side = usize::from(v[0] < 0.0);
             fastest[side] = fastest[side].max(v[0].abs());
             slowest[side] = slowest[side].min(v[0].abs());
+            speeds[side].push(v[0].abs());
+        }
+        // Levels 0.1 rad/s apart, binned by 0.05: where constant torques jumped a gap (friction
+        // falling with speed), speed-held levels fill it, so no two neighbours lie 0.3 rad/s apart.
+        for side in &mut speeds {
+            side.sort_by(f64::total_cmp);
+            let gap = side.windows(2).map(|w| (w[1] - w[0], w[0])).fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
+            assert!(gap.0 < 0.3, "{joints} joints, joint {}: no pair between {:.3} and {:.3} rad/s", joint + 1, gap.1, gap.1 + gap.0);
         }
         eprintln!(
             "{joints} joints, joint {}: pairs within {worst:.1e} N·m of the law, speeds {slowest:.2?}–{fastest:.2?} rad/s",
