@@ -32,10 +32,13 @@ pub fn check_friction(out: &Path, config: &ArmConfig, real: &ArmConfig, net_limi
             speeds[side].push(v[0].abs());
         }
         // Levels 0.1 rad/s apart, binned by 0.05: where constant torques jumped a gap (friction
-        // falling with speed), speed-held levels fill it, so no two neighbours lie 0.3 rad/s apart.
+        // falling with speed), speed-held levels fill it, so no two neighbours lie 0.3 rad/s apart
+        // up to the runs' top speed (5 rad/s; a climb that jumped past it once, and went back,
+        // keeps that level beyond it).
         for side in &mut speeds {
             side.sort_by(f64::total_cmp);
-            let gap = side.windows(2).map(|w| (w[1] - w[0], w[0])).fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
+            let gap =
+                side.windows(2).filter(|w| w[0] < 5.0).map(|w| (w[1] - w[0], w[0])).fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
             assert!(gap.0 < 0.3, "{joints} joints, joint {}: no pair between {:.3} and {:.3} rad/s", joint + 1, gap.1, gap.1 + gap.0);
         }
         eprintln!(
