@@ -13,8 +13,7 @@ with the sensors' noise off: a miss that the noise-free run meets while the true
 measured speed does no better than the net is the sensors' limit, and is marked so; a miss
 where even the true law with the noise off stays above the target, and the net does no worse
 than the law with and without the noise, is beyond the arm (friction too small a part of the
-uncompensated error), and is marked so. For sim
-NN/perfect: the simulated arm's true law scaled by 0.99 and by 1.01 over perfect; a miss no
+uncompensated error), and is marked so. For sim NN/perfect: the simulated arm's true law scaled by 0.99 and by 1.01 over perfect; a miss no
 further above 1 than the farther of those two from 1, on either side (a law 1 % off moves the
 ratio that far: upwards where the perfect run's error is tiny, either way where the arm sticks
 and slips), is marked so.
@@ -138,8 +137,8 @@ def verdicts(row):
         scatter = None if low is None or high is None else max(abs(low - 1), abs(high - 1))
         if scatter is not None and row["sim_nn_over_perfect"] - 1 <= scatter:
             missed.append(f"sim NN/perfect (within the true law +-{100 * err:.0f} %'s scatter: {low:.2f}, {high:.2f} x perfect)")
-        elif None not in (low, high, low_speed, err) and low_speed > err \
-                and max(abs(low - 1), abs(high - 1)) * low_speed / err >= row["sim_nn_over_perfect"] - 1:
+        elif None not in (scatter, low_speed, err) and low_speed > err \
+                and scatter * low_speed / err >= row["sim_nn_over_perfect"] - 1:
             # The nets are further off at low speed than the law error of the band, and the
             # band's change of the ratio, scaled by how much further, reaches the miss.
             missed.append(f"sim NN/perfect (nets {100 * low_speed:.1f} % off at low speed; the true law "

@@ -335,8 +335,9 @@ pub fn friction_run(
         let mut level = LevelRecord::default();
         for (target, feedforward) in targets {
             let wanted = direction * target;
-            // The closest level within half its target, if none stays within half a bin.
-            let mut fallback: Option<(f64, LevelRecord)> = None;
+            // The first level within half a bin of its target, else the closest within half
+            // its target: (how far off [rad/s], level).
+            let mut chosen: Option<(f64, LevelRecord)> = None;
             for bandwidth in SPEED_LOOP_RAD_S {
                 level.clear();
                 for k in 0..settle + average {
@@ -347,16 +348,16 @@ pub fn friction_run(
                 }
                 let off = (level.speed.iter().sum::<f64>() / level.speed.len() as f64 - wanted).abs();
                 if off < 0.5 * target.min(settings.bin_width) {
-                    fallback = Some((off, std::mem::take(&mut level)));
+                    chosen = Some((off, std::mem::take(&mut level)));
                     break;
                 }
-                if off < 0.5 * target && fallback.as_ref().is_none_or(|(best, _)| off < *best) {
-                    fallback = Some((off, level.clone()));
+                if off < 0.5 * target && chosen.as_ref().is_none_or(|(best, _)| off < *best) {
+                    chosen = Some((off, level.clone()));
                 }
             }
             // Judged like every level: the mean torque of a P loop's steady state, less H_ff
             // times the fitted acceleration.
-            if let Some((_, kept)) = fallback {
+            if let Some((_, kept)) = chosen {
                 run.levels.push(kept);
                 run.speed_levels += 1;
             }
