@@ -140,6 +140,26 @@ fn check_quality(out: &Path, config: &ArmConfig, joints: usize) {
     assert!(none / perfect >= 5.0, "{joints} joints: sim none/perfect {}", none / perfect);
     assert!(real_nn / real_none <= 0.3, "{joints} joints: real NN/none {}", real_nn / real_none);
 
+    // The law-sensitivity loops ran, their systems are kept, and the report's verdict on
+    // NN/perfect follows their figures: chaotic exactly when the law 0.1 % off moves the
+    // ratio past the target's margin.
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let largest_move = |key: &str, error: f64| {
+        let law = &json["table_1"][key];
+        assert_eq!(law["law_error"].as_f64(), Some(error), "{joints} joints: {key}");
+        let side = |name: &str| law[name].as_f64().unwrap_or_else(|| panic!("{joints} joints: {key}.{name} missing"));
+        let (low, high) = (side("low_over_perfect"), side("high_over_perfect"));
+        assert!(low > 0.0 && high > 0.0, "{joints} joints: {key} {low} {high}");
+        assert!(report.contains(&format!("{low:.3} and {high:.3}")), "{joints} joints: the report lacks {key}'s figures");
+        (low - 1.0).abs().max((high - 1.0).abs())
+    };
+    largest_move("sim_law_sensitivity", 0.01);
+    let chaotic = largest_move("sim_law_sensitivity_fine", 0.001) > 0.10;
+    assert_eq!(report.contains("the ratio is chaotic on this arm"), chaotic, "{joints} joints: the report's verdict");
+    for name in ["tracking_sim_perfect_fine_low", "tracking_sim_perfect_fine_high"] {
+        assert!(out.join("systems").join(format!("{name}.toml")).is_file(), "{joints} joints: no {name}.toml");
+    }
+
     let real: ArmConfig = serde_json::from_value(json["setup"]["real"].clone()).unwrap();
     quality::check_friction(out, config, &real, Some(0.02));
 }

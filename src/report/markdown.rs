@@ -242,7 +242,7 @@ pub fn report_markdown(run: &PaperRun) -> String {
                 100.0 * worst_sim_net,
                 pct = 100.0 * law.law_error
             )
-        } else if (low - 1.0).abs().max((high - 1.0).abs()) > SIM_NN_OVER_PERFECT_TARGET - 1.0 {
+        } else if law.largest_move().is_some_and(|m| m > SIM_NN_OVER_PERFECT_TARGET - 1.0) {
             format!(
                 " A {pct:.0} % change of the law itself moves the ratio by more than the target's margin (stick–slip makes the \
                  error sensitive to small changes), so NN/perfect differences within that scatter say little.",
@@ -251,10 +251,35 @@ pub fn report_markdown(run: &PaperRun) -> String {
         } else {
             String::new()
         };
+        let fine = &t.sim_law_sensitivity_fine;
+        let fine_reading = match (fine.low_over_perfect, fine.high_over_perfect, fine.largest_move()) {
+            (Some(fine_low), Some(fine_high), Some(moved)) => {
+                let chaotic = moved > SIM_NN_OVER_PERFECT_TARGET - 1.0;
+                format!(
+                    " Scaled by {:.3} and {:.3} it gives {fine_low:.3} and {fine_high:.3} (`_fine_low.toml`, `_fine_high.toml`){}",
+                    1.0 - fine.law_error,
+                    1.0 + fine.law_error,
+                    if chaotic {
+                        format!(
+                            ": **the ratio is chaotic on this arm.** A law {:.1} % off (the nets here are up to {:.1} % off at low \
+                             speed) already moves it past the target's margin, so NN/perfect ≤ {SIM_NN_OVER_PERFECT_TARGET} cannot be \
+                             asked of a compensator identified from data here, and the ratio does not rank compensators; none/perfect \
+                             and the nets' errors (below) do.",
+                            100.0 * fine.law_error,
+                            100.0 * worst_sim_net
+                        )
+                    } else {
+                        ".".to_owned()
+                    }
+                )
+            }
+            _ => String::new(),
+        };
         let _ = writeln!(
             s,
             "**What NN/perfect can tell.** The simulated arm tracked with its own true friction law scaled by {:.2} and {:.2} gives \
-             {low:.3} and {high:.3} × the exact law's MSE (`systems/tracking_sim_perfect_low.toml`, `_high.toml`).{reading}\n",
+             {low:.3} and {high:.3} × the exact law's MSE (`systems/tracking_sim_perfect_low.toml`, `_high.toml`).{reading}\
+             {fine_reading}\n",
             1.0 - law.law_error,
             1.0 + law.law_error
         );

@@ -37,6 +37,24 @@ def test_a_miss_within_the_laws_scatter_either_way_is_explained_and_one_beyond_i
     assert len(missed) == 1 and "not explained" in missed[0]
 
 
+def test_a_miss_is_chaotic_only_where_the_law_a_tenth_of_a_percent_off_moves_the_ratio_and_the_nets_are_further_off():
+    # The 6-joint example: the law 1 % off gives 1.74 and 2.49, 0.1 % off 1.64 and 0.99; nets 1 % off at low speed.
+    chaotic = dict(sim_nn_over_perfect=4.86, sim_law_low_over_perfect=1.74, sim_law_high_over_perfect=2.49,
+                   sim_fine_low_over_perfect=1.64, sim_fine_high_over_perfect=0.99, sim_fine_law_error=0.001,
+                   worst_low_speed_share_sim=0.01)
+    missed, _ = family_table.verdicts(row(**chaotic))
+    assert len(missed) == 1 and "chaotic" in missed[0]
+    # The law 0.1 % off stays within the target's margin: the ratio is not chaotic at that scale.
+    missed, _ = family_table.verdicts(row(**{**chaotic, "sim_fine_low_over_perfect": 1.04, "sim_fine_high_over_perfect": 0.97}))
+    assert len(missed) == 1 and "chaotic" not in missed[0]
+    # Nets within 0.1 % at low speed: the fine band would bound them, so chaos explains nothing.
+    missed, _ = family_table.verdicts(row(**{**chaotic, "worst_low_speed_share_sim": 0.0005}))
+    assert len(missed) == 1 and "chaotic" not in missed[0]
+    # Runs written before results.json carried the fine band: no verdict from it.
+    missed, _ = family_table.verdicts(row(**{**chaotic, "sim_fine_low_over_perfect": None}))
+    assert len(missed) == 1 and "chaotic" not in missed[0]
+
+
 def test_real_misses_are_put_down_to_the_sensors_only_where_the_quiet_run_meets_the_target():
     missed, _ = family_table.verdicts(row(real_nn_over_none=0.5, real_nn_over_none_true=0.2))
     assert missed == ["real NN/none (met on the true positions: the measured error's noise floor)"]

@@ -61,11 +61,12 @@ ADAPTATION = [f"{run}_{case}" for run in ("drift", "payload") for case in ("perf
     "steady_static", "steady_adaptive"]
 
 
-# The diagnostic loops of Table 1 (the true friction law scaled by 0.99 and 1.01; on the real arm
+# The diagnostic loops of Table 1 (the true friction law scaled by 0.99, 1.01, 0.999 and 1.001; on the real arm
 # the true law on the measured speed, and the sensors' noise off) are the tracking loops above
 # with other parameters or compensator files, the same system graph: the engines are compared on
 # those, not again on these.
-DIAGNOSTIC = ["tracking_sim_perfect_low", "tracking_sim_perfect_high", "tracking_real_perfect", "tracking_real_perfect_quiet",
+DIAGNOSTIC = ["tracking_sim_perfect_low", "tracking_sim_perfect_high", "tracking_sim_perfect_fine_low", "tracking_sim_perfect_fine_high",
+              "tracking_real_perfect", "tracking_real_perfect_quiet",
               "tracking_real_nn_quiet", "tracking_real_none_quiet"]
 
 
