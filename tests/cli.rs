@@ -306,6 +306,9 @@ fn paper_refuses_arms_it_cannot_run_and_says_why() {
     paper_fails_with(&["--friction-max-speed", "0.1"], &[], &["--friction-max-speed", "outside 0.5 to 50 rad/s"]);
     paper_fails_with(&["--friction-max-speed", "NaN"], &[], &["--friction-max-speed", "outside 0.5 to 50 rad/s"]);
     paper_fails_with(&["--joint-gains", "50"], &[], &["--joint-gains takes two numbers"]);
+    paper_fails_with(&["--tracking-gains", "1000"], &[], &["--tracking-gains takes kp,kd or kp,kd,null_damping", "got 1"]);
+    paper_fails_with(&["--tracking-gains", "1000,160,20,1"], &[], &["--tracking-gains takes", "got 4"]);
+    paper_fails_with(&["--tracking-gains", "1000,160,-1"], &[], &["--tracking-gains", "null-space damping must be >= 0"]);
     paper_fails_with(&["-c", "broken.toml"], &[("broken.toml", "[arm]\ngravity_m_s2 = 9.81\n".into())], &["broken.toml"]);
 }
 

@@ -122,7 +122,7 @@ pub enum Controller {
         #[arg(long, default_value_t = 160.0)]
         kd: f64,
         /// Damping of the self-motion of the redundant joints [1/s].
-        #[arg(long, default_value_t = 10.0)]
+        #[arg(long, default_value_t = neurarm_physics::control::DEFAULT_NULL_DAMPING)]
         null_damping: f64,
         /// Centre of the curve [m], x,y (default: from the reach).
         #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]

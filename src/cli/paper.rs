@@ -49,7 +49,8 @@ pub struct PaperArgs {
     /// Scale of the reference, 1 = the paper's 0.4 m × 0.3 m (default: the reach in m).
     #[arg(long)]
     scale: Option<f64>,
-    /// Task-space gains K_p [1/s²], K_d [1/s] (default 1000,160).
+    /// Task-space gains K_p [1/s²], K_d [1/s] and optionally the null-space damping of a
+    /// redundant arm's self-motion k [1/s] (default 1000,160,10).
     #[arg(long, value_delimiter = ',')]
     tracking_gains: Option<Vec<f64>>,
     /// Joint-space loop gains K_p [N·m/rad], K_d [N·m·s/rad], taken as given (default: 50,2
@@ -141,9 +142,20 @@ pub fn run(args: PaperArgs) -> Result<()> {
         settings.threads = t.max(1);
     }
     if let Some(g) = tracking_gains {
-        let (kp, kd) = gain_pair("--tracking-gains", &g)?;
+        let (pair, null_damping) = match g.len() {
+            2 => (&g[..], None),
+            3 => (&g[..2], Some(g[2])),
+            n => bail!("--tracking-gains takes kp,kd or kp,kd,null_damping; got {n} numbers"),
+        };
+        let (kp, kd) = gain_pair("--tracking-gains", pair)?;
         settings.tracking_gains.kp = kp;
         settings.tracking_gains.kd = kd;
+        if let Some(null) = null_damping {
+            if !(null.is_finite() && null >= 0.0) {
+                bail!("--tracking-gains: the null-space damping must be >= 0 (got {null})");
+            }
+            settings.tracking_gains.null_damping = null;
+        }
     }
     if let Some(poses) = gravity_poses {
         settings.gravity_design = Some(GravityDesign::Sampled { poses: poses as usize });

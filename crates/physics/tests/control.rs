@@ -44,6 +44,57 @@ fn pseudo_inverse_meets_the_penrose_conditions_at_regular_and_singular_poses() {
     assert!(pseudo_inverse(&nalgebra::DMatrix::from_element(2, 4, f64::NAN)).is_none());
 }
 
+/// The task-space law's inverse J# against an independent formulation: away from singular
+/// poses it is J⁺ itself; within the margin ε of one, u = J# a is the minimiser of
+/// ‖J u − a‖² + λ² ‖u‖² (its gradient Jᵀ(J u − a) + λ² u vanishes) with λ² = ε² − σ₂², σ₂ from
+/// an SVD of J; it stays within 1/ε through the singular pose and has no jump at σ₂ = ε.
+#[test]
+fn the_damped_inverse_is_the_pseudo_inverse_away_from_singular_poses_and_bounded_through_them() {
+    let arm = ArmParams::default_four_link();
+    let margin = SINGULAR_MARGIN_SHARE * arm.links.iter().map(|l| l.length_m).sum::<f64>();
+    let damped = |jac: &nalgebra::DMatrix<f64>| {
+        let (mut jt, mut inv, mut out) = (nalgebra::DMatrix::zeros(4, 2), nalgebra::DMatrix::zeros(2, 2), nalgebra::DMatrix::zeros(4, 2));
+        assert!(damped_inverse_into(jac, margin, &mut jt, &mut inv, &mut out));
+        out
+    };
+    let smallest_singular = |jac: &nalgebra::DMatrix<f64>| jac.clone().svd(false, false).singular_values.min();
+    // Regular: the same numbers as J⁺.
+    let jac = jacobian(&arm, &[0.3, 1.1, -0.7, 0.5]);
+    assert!(smallest_singular(&jac) > margin);
+    assert_eq!(damped(&jac), pseudo_inverse(&jac).unwrap());
+    // Sweep joint 2 through the stretched pose (σ₂ = 0 at q₂ = q₃ = q₄ = 0).
+    let a = DVector::from_vec(vec![0.7, -1.3]);
+    let mut damped_poses = 0;
+    let mut previous: Option<(f64, nalgebra::DMatrix<f64>)> = None;
+    for k in -400..=400 {
+        let bend = k as f64 * 1e-3;
+        let jac = jacobian(&arm, &[0.3, bend, 0.5 * bend, 0.0]);
+        let sigma = smallest_singular(&jac);
+        let inverse = damped(&jac);
+        assert!(inverse.norm() <= 2f64.sqrt() / margin * (1.0 + 1e-9), "‖J#‖ {} at bend {bend}", inverse.norm());
+        if sigma < margin {
+            damped_poses += 1;
+            let lambda2 = margin * margin - sigma * sigma;
+            let u = &inverse * &a;
+            let gradient = jac.transpose() * (&jac * &u - &a) + lambda2 * &u;
+            assert!(gradient.amax() < 1e-9 * (1.0 + a.amax()), "gradient {} at bend {bend}", gradient.amax());
+        } else {
+            assert_eq!(inverse, pseudo_inverse(&jac).unwrap(), "undamped at bend {bend}");
+        }
+        // Continuous: neighbouring poses 1 mrad apart give neighbouring inverses, the switch
+        // between the two forms included.
+        if let Some((last_bend, last)) = &previous {
+            let step = (&inverse - last).amax();
+            assert!(step < 0.05 / margin * (bend - last_bend) / 1e-3, "jump {step} at bend {bend}");
+        }
+        previous = Some((bend, inverse));
+    }
+    assert!(damped_poses > 10 && damped_poses < 801, "{damped_poses} damped poses: the sweep must cross the margin");
+    let nan = nalgebra::DMatrix::from_element(2, 4, f64::NAN);
+    let (mut jt, mut inv, mut out) = (nalgebra::DMatrix::zeros(4, 2), nalgebra::DMatrix::zeros(2, 2), nalgebra::DMatrix::zeros(4, 2));
+    assert!(!damped_inverse_into(&nan, margin, &mut jt, &mut inv, &mut out));
+}
+
 /// With the controller's model equal to the arm (no friction), the end-effector acceleration
 /// produced by forward dynamics equals ẍ_d + K_d ė + K_p e exactly, and the null-space part
 /// of q̈ is the commanded damping.

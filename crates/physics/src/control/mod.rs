@@ -216,6 +216,57 @@ pub fn pseudo_inverse(jac: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     pseudo_inverse_into(jac, &mut jac_t, &mut jjt_inverse, &mut out).then_some(out)
 }
 
+/// The singular-value margin ε of the task-space law's inverse as a share of the arm's reach
+/// (ε = 0.05 R [m/rad]; see [`damped_inverse_into`]).
+pub const SINGULAR_MARGIN_SHARE: f64 = 0.05;
+
+/// The task-space law's inverse J# (n×2) of a 2×n Jacobian into `out`: the Moore–Penrose
+/// pseudo-inverse ([`pseudo_inverse_into`], the same numbers) while J's smallest singular value
+/// σ₂ is at least `margin` ε [m/rad], and within ε of a singular pose the damped least-squares
+/// inverse Jᵀ (J Jᵀ + λ² I)⁻¹ with λ² = ε² − σ₂², which shrinks to 0 at σ₂ = ε (so J# is
+/// continuous there) and lifts J Jᵀ's smallest eigenvalue to ε² (so ‖J#‖ ≤ 1/ε: the joint
+/// accelerations stay bounded through a singular pose, where J⁺ grows as 1/σ₂).
+///
+/// Why: the task fixes only the end effector, and a redundant arm's self-motion wanders. In
+/// long runs it carried the 3- and 6-joint example arms into singular poses (σ₂ 0.003 and
+/// 0.03 m/rad), where J⁺ asked for accelerations that threw the joints past 100 rad/s.
+/// u = J# a is the minimiser of ‖J u − a‖² + λ² ‖u‖²: near the singular pose the task
+/// acceleration along the lost direction is followed only partly. Returns false, leaving `out`
+/// meaningless, only when J is not finite.
+pub fn damped_inverse_into(
+    jac: &DMatrix<f64>,
+    margin: f64,
+    jac_t: &mut DMatrix<f64>,
+    jjt_inverse: &mut DMatrix<f64>,
+    out: &mut DMatrix<f64>,
+) -> bool {
+    if !jac.iter().all(|v| v.is_finite()) {
+        return false;
+    }
+    jac.transpose_to(jac_t);
+    let mut m = Matrix2::zeros();
+    jac.mul_to(jac_t, &mut m);
+    let damping = margin * margin - smallest_eigenvalue(&m);
+    if !(damping > 0.0) {
+        return pseudo_inverse_into(jac, jac_t, jjt_inverse, out);
+    }
+    m[(0, 0)] += damping;
+    m[(1, 1)] += damping;
+    match m.try_inverse() {
+        Some(inv) => jjt_inverse.copy_from(&inv),
+        None => return false,
+    }
+    jac_t.mul_to(jjt_inverse, out);
+    true
+}
+
+/// The smaller eigenvalue of the symmetric positive semi-definite 2×2 `m` (J Jᵀ: σ₂²), ≥ 0.
+fn smallest_eigenvalue(m: &Matrix2<f64>) -> f64 {
+    let (a, b, c) = (m[(0, 0)], 0.5 * (m[(0, 1)] + m[(1, 0)]), m[(1, 1)]);
+    let half_gap = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    (0.5 * (a + c) - half_gap).max(0.0)
+}
+
 /// Gains and null-space damping of the task-space controller.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TaskSpaceGains {
@@ -224,7 +275,8 @@ pub struct TaskSpaceGains {
     /// Velocity gain K_d [1/s] (the paper: 160).
     pub kd: f64,
     /// Damping of the self-motion in the null space of J [1/s]: the redundant joints get
-    /// q̈_null = −k (I − J⁺J) q̇, so motion the task does not need dies out.
+    /// q̈_null = −k (I − J⁺J) q̇, so motion the task does not need dies out. Default
+    /// [`DEFAULT_NULL_DAMPING`].
     pub null_damping: f64,
     /// Stiffness of the self-motion towards a rest pose [1/s²] (used when the
     /// [`TaskSpaceData`] has one, [`TaskSpaceData::set_rest_pose`]): the null-space term becomes
@@ -238,9 +290,23 @@ pub struct TaskSpaceGains {
     pub null_stiffness: f64,
 }
 
+/// The default null-space damping of [`TaskSpaceGains`] [1/s].
+///
+/// Friction a compensator gets wrong acts on the self-motion of a redundant arm, which the
+/// task does not see; only this damping holds it, and it decides which joints stop and stick.
+/// No value suits every arm (measured in issue 24 on the Table 1 loops of 20 family arms and
+/// the example arms, with the same nets): at 20 1/s the 6-joint example's NN/perfect is 1.002
+/// and no longer chaotic (4.86 at 10, where the law 0.1 % low gives 1.64), but the family has
+/// as many arms whose ratio is chaotic as at 10 (7 against 9), other ones (seeds 11, 18, 19 go
+/// from 0.44–1.04 to 1.24–2.06), and two arms fall below none/perfect 5; the perfectly
+/// compensated arm tracks worse the harder the self-motion is damped (built-in arm: MSE ×3.7 at
+/// 20, and its ratio turns chaotic at 30). So it stays at 10, and `neurarm paper
+/// --tracking-gains kp,kd,k` sets it.
+pub const DEFAULT_NULL_DAMPING: f64 = 10.0;
+
 impl Default for TaskSpaceGains {
     fn default() -> Self {
-        Self { kp: 1000.0, kd: 160.0, null_damping: 10.0, null_stiffness: 0.0 }
+        Self { kp: 1000.0, kd: 160.0, null_damping: DEFAULT_NULL_DAMPING, null_stiffness: 0.0 }
     }
 }
 
@@ -275,6 +341,8 @@ pub struct TaskSpaceData {
     rest_pose: DVector<f64>,
     has_rest_pose: bool,
     u: DVector<f64>,
+    /// ε of [`damped_inverse_into`]: [`SINGULAR_MARGIN_SHARE`] of the reach [m/rad].
+    singular_margin: f64,
     arm: ArmData,
 }
 
@@ -297,8 +365,14 @@ impl TaskSpaceData {
             rest_pose: DVector::zeros(n),
             has_rest_pose: false,
             u: DVector::zeros(n),
+            singular_margin: SINGULAR_MARGIN_SHARE * model.links.iter().map(|l| l.length_m).sum::<f64>(),
             arm: ArmData::new(model),
         }
+    }
+
+    /// ε of the task-space law's inverse [m/rad] (see [`damped_inverse_into`]).
+    pub fn singular_margin(&self) -> f64 {
+        self.singular_margin
     }
 
     /// Gives the self-motion a rest pose `q_rest` [rad], one angle per joint (see
@@ -327,21 +401,23 @@ impl TaskSpaceData {
         &self.jacobian
     }
 
-    /// The pseudo-inverse J⁺ [rad/m] of the last call.
+    /// The inverse J# [rad/m] of the last call: J⁺, damped near a singular pose ([`damped_inverse_into`]).
     pub fn pseudo_inverse(&self) -> &DMatrix<f64> {
         &self.pseudo_inverse
     }
 
-    /// The null-space projector I − J⁺J of the last call.
+    /// I − J#J of the last call: the null-space projector I − J⁺J away from singular poses.
     pub fn null_projector(&self) -> &DMatrix<f64> {
         &self.null_projector
     }
 }
 
 /// Joint accelerations the task-space law asks for,
-/// u = J⁺ (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) + (I − J⁺J)(k_s (q_rest − q) − k q̇)
-/// [rad/s²], into `data` ([`TaskSpaceData::acceleration`]); without a rest pose in `data`
-/// the k_s term is left out. False when the inputs are not finite.
+/// u = J# (ẍ_d + K_d (ẋ_d − ẋ) + K_p (x_d − x) − J̇q̇) + (I − J#J)(k_s (q_rest − q) − k q̇)
+/// [rad/s²], into `data` ([`TaskSpaceData::acceleration`]), J# the pseudo-inverse J⁺, damped
+/// within [`TaskSpaceData::singular_margin`] of a singular pose ([`damped_inverse_into`]);
+/// without a rest pose in `data` the k_s term is left out. False when the inputs are not
+/// finite.
 pub fn task_space_acceleration_into(
     model: &ArmParams,
     data: &mut TaskSpaceData,
@@ -352,7 +428,7 @@ pub fn task_space_acceleration_into(
 ) -> bool {
     let d = data;
     jacobian_into(model, q, d.jacobian.as_mut_slice());
-    if !pseudo_inverse_into(&d.jacobian, &mut d.jacobian_t, &mut d.jjt_inverse, &mut d.pseudo_inverse) {
+    if !damped_inverse_into(&d.jacobian, d.singular_margin, &mut d.jacobian_t, &mut d.jjt_inverse, &mut d.pseudo_inverse) {
         return false;
     }
     d.qd.copy_from_slice(qd);
