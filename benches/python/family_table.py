@@ -94,6 +94,8 @@ def read_row(out, seed, wall_s, rc):
     row["sim_fine_high_over_perfect"] = fine.get("high_over_perfect")
     row["sim_fine_law_error"] = fine.get("law_error")
     row["diagnostic_failures"] = r["table_1"].get("diagnostic_failures", [])
+    # The online-adaptation runs that failed (not one of issue 24's targets, shown beside them).
+    row["adaptation_failures"] = [name for name, _ in r.get("adaptation", {}).get("failures", [])]
     row["worst_friction_net_share"] = max(f["net_error_share"] for f in r["friction"])
     # The simulated arm's nets at low speed (5-200 mrad/s), where they cross the Coulomb step:
     # what NN/perfect is most sensitive to. Runs written before results.json carried it: None.
@@ -218,6 +220,8 @@ def table(rows):
             note += " (none/perfect < 5: little friction)"
         if row.get("diagnostic_failures"):
             note += "; diagnostic loop failed: " + "; ".join(row["diagnostic_failures"])
+        if row.get("adaptation_failures"):
+            note += "; adaptation run failed: " + ", ".join(row["adaptation_failures"])
         lines.append(
             f"| {row['seed']} | {row['joints']} | {row['sim_nn_over_perfect']:.3f} | {law} | {fine} | {row['sim_none_over_perfect']:.1f} | "
             f"{row['real_nn_over_none']:.3f} | {row['real_nn_over_none_true']:.3f} | {fmt(row.get('real_perfect_over_none'))} | {fmt(row.get('real_nn_over_none_quiet'))} | {100 * row['worst_friction_net_share']:.2f} % | {low_speed} | {100 * row['gravity_rms_share']:.2f} % | "
