@@ -264,7 +264,8 @@ pub fn report_markdown(run: &PaperRun) -> String {
                             ": **the ratio is chaotic on this arm.** A law {:.1} % off (the nets here are up to {:.1} % off at low \
                              speed) already moves it past the target's margin, so NN/perfect ≤ {SIM_NN_OVER_PERFECT_TARGET} cannot be \
                              asked of a compensator identified from data here, and the ratio does not rank compensators; none/perfect \
-                             and the nets' errors (below) do.",
+                             and the nets' errors (below) do. Which joints stick also depends on the null-space damping \
+                             (`--tracking-gains kp,kd,k`; `benches/python/null_damping_scan.py` reruns these loops at several k).",
                             100.0 * fine.law_error,
                             100.0 * worst_sim_net
                         )
