@@ -10,9 +10,10 @@
 //! from the targets as the ideal compensator (issue 24's targets); on the emulated real arm with
 //! its sensor noise switched off, the true friction law tracks better than no compensation.
 //!
-//! Printed, not asserted, because on some of these arms they miss issue 24's targets (open; see
-//! its notes and `scripts/bench-family`): sim NN/perfect (target ≤ 1.10; stick–slip, see the
-//! last column, the share of the perfect run's samples with a joint at rest), none/perfect
+//! Printed, not asserted, because on some of these arms they miss issue 24's targets for causes
+//! its notes and `scripts/bench-family` put down to the law's scatter, the sensors or the arm:
+//! sim NN/perfect (target ≤ 1.10; stick–slip, see the last column, the share of the perfect
+//! run's samples with a joint at rest, and the ratio chaotic in small changes), none/perfect
 //! (≥ 5), real NN/none (≤ 0.3; the emulated sensors' noise floor: printed beside it are the true
 //! law fed the measured speed over none, and NN/none and true law/none with the noise off) and the
 //! friction nets' error (2 % on the example arms).
