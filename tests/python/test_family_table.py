@@ -75,3 +75,13 @@ def test_real_misses_are_put_down_to_the_sensors_only_where_the_quiet_run_meets_
 
 def test_little_friction_is_reported_not_missed():
     assert family_table.verdicts(row(sim_none_over_perfect=4.8)) == ([], True)
+
+
+def test_none_over_perfect_below_five_on_a_chaotic_arm_is_a_miss_put_down_to_chaos_not_little_friction():
+    # Seed 9 of the bench: the perfect run's error moved 0.36 x and 0.39 x under the law 0.1 % off.
+    missed, little = family_table.verdicts(row(sim_none_over_perfect=2.8, sim_fine_low_over_perfect=0.36,
+                                               sim_fine_high_over_perfect=0.39, sim_fine_law_error=0.001))
+    assert not little and len(missed) == 1 and missed[0].startswith("none/perfect (chaotic")
+    # Within the margin at 0.1 %: little friction, as before.
+    assert family_table.verdicts(row(sim_none_over_perfect=2.8, sim_fine_low_over_perfect=1.02,
+                                     sim_fine_high_over_perfect=0.99, sim_fine_law_error=0.001)) == ([], True)
