@@ -174,29 +174,46 @@ pub fn pseudo_inverse_into(jac: &DMatrix<f64>, jac_t: &mut DMatrix<f64>, jjt_inv
     if !jac.iter().all(|v| v.is_finite()) {
         return false;
     }
+    let m = jacobian_product_into(jac, jac_t);
+    pseudo_inverse_from(&m, jac_t, jjt_inverse, out);
+    true
+}
+
+/// Jᵀ into `jac_t` and J Jᵀ returned.
+fn jacobian_product_into(jac: &DMatrix<f64>, jac_t: &mut DMatrix<f64>) -> Matrix2<f64> {
     jac.transpose_to(jac_t);
     let mut m = Matrix2::zeros();
     jac.mul_to(jac_t, &mut m);
+    m
+}
+
+/// J⁺ = Jᵀ (J Jᵀ)⁺ into `out` from `m` = J Jᵀ and `jac_t` = Jᵀ ([`pseudo_inverse_into`]).
+fn pseudo_inverse_from(m: &Matrix2<f64>, jac_t: &DMatrix<f64>, jjt_inverse: &mut DMatrix<f64>, out: &mut DMatrix<f64>) {
     // det(JJᵀ)/‖JJᵀ‖² ≈ (σ₂/σ₁)²: the fast form while σ₂/σ₁ > 1e-6.
     let regular = m.determinant().abs() > 1e-12 * m.norm_squared();
     match m.try_inverse().filter(|_| regular) {
         Some(inv) => jjt_inverse.copy_from(&inv),
-        None => jjt_inverse.copy_from(&rank_cut_inverse(&m)),
+        None => jjt_inverse.copy_from(&rank_cut_inverse(m)),
     }
     jac_t.mul_to(jjt_inverse, out);
-    true
+}
+
+/// The eigenvalues (λ₁, λ₂), λ₁ ≥ λ₂ ≥ 0, of the symmetric positive semi-definite 2×2 `m`
+/// (J Jᵀ: σ₁², σ₂²), in closed form.
+fn eigenvalues(m: &Matrix2<f64>) -> (f64, f64) {
+    let (a, b, c) = (m[(0, 0)], 0.5 * (m[(0, 1)] + m[(1, 0)]), m[(1, 1)]);
+    let half_gap = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    (0.5 * (a + c) + half_gap, (0.5 * (a + c) - half_gap).max(0.0))
 }
 
 /// (J Jᵀ)⁺ of the symmetric positive semi-definite 2×2 `m` = J Jᵀ, keeping the eigenvalue
 /// λ₂ only if σ₂ = √λ₂ exceeds 1e-6 σ₁.
 fn rank_cut_inverse(m: &Matrix2<f64>) -> Matrix2<f64> {
     let (a, b, c) = (m[(0, 0)], 0.5 * (m[(0, 1)] + m[(1, 0)]), m[(1, 1)]);
-    let half_gap = (0.25 * (a - c) * (a - c) + b * b).sqrt();
-    let largest = 0.5 * (a + c) + half_gap;
+    let (largest, smallest) = eigenvalues(m);
     if !(largest > 0.0) {
         return Matrix2::zeros();
     }
-    let smallest = (0.5 * (a + c) - half_gap).max(0.0);
     // Eigenvector of the largest eigenvalue from the better-conditioned row of m − λ₁I.
     let v = if a >= c { Vector2::new(largest - c, b) } else { Vector2::new(b, largest - a) };
     let v = if v.norm() > 0.0 { v.normalize() } else { Vector2::new(1.0, 0.0) };
@@ -243,12 +260,11 @@ pub fn damped_inverse_into(
     if !jac.iter().all(|v| v.is_finite()) {
         return false;
     }
-    jac.transpose_to(jac_t);
-    let mut m = Matrix2::zeros();
-    jac.mul_to(jac_t, &mut m);
-    let damping = margin * margin - smallest_eigenvalue(&m);
+    let mut m = jacobian_product_into(jac, jac_t);
+    let damping = margin * margin - eigenvalues(&m).1;
     if !(damping > 0.0) {
-        return pseudo_inverse_into(jac, jac_t, jjt_inverse, out);
+        pseudo_inverse_from(&m, jac_t, jjt_inverse, out);
+        return true;
     }
     m[(0, 0)] += damping;
     m[(1, 1)] += damping;
@@ -258,13 +274,6 @@ pub fn damped_inverse_into(
     }
     jac_t.mul_to(jjt_inverse, out);
     true
-}
-
-/// The smaller eigenvalue of the symmetric positive semi-definite 2×2 `m` (J Jᵀ: σ₂²), ≥ 0.
-fn smallest_eigenvalue(m: &Matrix2<f64>) -> f64 {
-    let (a, b, c) = (m[(0, 0)], 0.5 * (m[(0, 1)] + m[(1, 0)]), m[(1, 1)]);
-    let half_gap = (0.25 * (a - c) * (a - c) + b * b).sqrt();
-    (0.5 * (a + c) - half_gap).max(0.0)
 }
 
 /// Gains and null-space damping of the task-space controller.
