@@ -15,7 +15,6 @@ Prints one line per draw and writes RUN/law_scatter.json ({"law_error", "draws":
 
 import argparse
 import concurrent.futures
-import csv
 import json
 import os
 import random
@@ -23,17 +22,7 @@ import re
 import subprocess
 import tempfile
 
-
-def mse(path):
-    """Mean over time and both coordinates of the controller's squared tracking error [m^2],
-    as Table 1 has it."""
-    with open(path) as f:
-        rows = csv.DictReader(f)
-        total, count = 0.0, 0
-        for r in rows:
-            total += float(r["ctl.error_x"]) ** 2 + float(r["ctl.error_y"]) ** 2
-            count += 2
-    return total / count
+from null_damping_scan import mse
 
 
 def main():
