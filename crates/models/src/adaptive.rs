@@ -97,6 +97,7 @@ impl Default for AdaptationLaw {
 
 impl ModelKind for AdaptiveCompensatorSpec {
     fn build(&self, identifier: &str, resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
+        crate::compensator::check_switches((self.enable_friction, self.enable_gravity), &self.friction, self.gravity.as_deref())?;
         let (friction, gravity, crc) = load_nets(resources, self.joints, &self.friction, self.gravity.as_deref())?;
         let enable = (self.enable_friction, self.enable_gravity);
         Ok(Box::new(AdaptiveCompensatorModel::new(identifier, self.joints, &friction, gravity.as_ref(), enable, self.law, crc)?))

@@ -34,6 +34,7 @@ pub struct NnCompensatorSpec {
 
 impl ModelKind for NnCompensatorSpec {
     fn build(&self, identifier: &str, resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
+        check_switches((self.enable_friction, self.enable_gravity), &self.friction, self.gravity.as_deref())?;
         let (friction, gravity, crc) = load_nets(resources, self.joints, &self.friction, self.gravity.as_deref())?;
         let enable = (self.enable_friction, self.enable_gravity);
         Ok(Box::new(NnCompensatorModel::new(identifier, self.joints, &friction, gravity.as_ref(), enable, crc)?))
@@ -46,6 +47,22 @@ impl ModelKind for NnCompensatorSpec {
     fn equations_html(&self) -> &'static str {
         EQUATIONS_HTML
     }
+}
+
+/// Refuses a part switched on (`enable` = friction, gravity) that the spec gives no nets for:
+/// it would add nothing while saying it does.
+pub(crate) fn check_switches(enable: (bool, bool), friction: &[String], gravity: Option<&str>) -> Result<(), BuildError> {
+    if enable.0 && friction.is_empty() {
+        return Err(BuildError::Spec(
+            "enable_friction = true, but friction = [] names no friction nets: list one weights file per joint, or set enable_friction = false".into(),
+        ));
+    }
+    if enable.1 && gravity.is_none() {
+        return Err(BuildError::Spec(
+            "enable_gravity = true, but no gravity net is named: give gravity = \"<weights file>\", or set enable_gravity = false".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Reads a compensator's weights files (`friction` in joint order, `gravity`) from
