@@ -187,7 +187,8 @@ fn instantiate_rejects_bad_arguments_with_a_logged_reason() {
     let guid = fmu.guid();
     let uri = fmu.resource_uri();
     let cases: Vec<(&str, String, String, &str)> = vec![
-        ("", guid.clone(), uri.clone(), "instance name is NULL or empty"),
+        ("", guid.clone(), uri.clone(), "instance name is NULL, empty"),
+        (" \t", guid.clone(), uri.clone(), "white space only"),
         ("a", "{00000000-0000-0000-0000-000000000000}".into(), uri.clone(), "does not match"),
         ("a", guid.clone(), "http://example.org/resources".into(), "not a file URI"),
         ("a", guid.clone(), "file:relative/resources".into(), "not an absolute path"),

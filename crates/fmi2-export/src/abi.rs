@@ -6,12 +6,11 @@
 //! C ABI without a shared library); a model author calls none of them.
 
 use std::ffi::{c_char, c_int, c_void, CString};
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 
 use crate::instance::{Function, Instance, LogSink, Phase, Status};
 use crate::model::ModelFactory;
-use crate::raw::{self, slice, slice_mut, str_arg};
+use crate::raw::{self, catch_panic, slice, slice_mut, str_arg};
 
 /// `fmi2Component`.
 pub type Component = *mut c_void;
@@ -85,10 +84,9 @@ unsafe fn with(c: Component, name: &str, body: impl FnOnce(&mut Wrapper) -> Stat
         return Status::Fatal as c_int;
     }
     wrapper.instance.trace(|| name.to_string());
-    match catch_unwind(AssertUnwindSafe(|| body(&mut *wrapper))) {
+    match catch_panic(|| body(&mut *wrapper)) {
         Ok(s) => s as c_int,
-        Err(panic) => {
-            let why = panic_message(&*panic);
+        Err(why) => {
             wrapper.instance.error(&format!("{name}: internal error ({why}); the instance can only be freed"));
             wrapper.instance.set_fatal();
             Status::Fatal as c_int
@@ -130,9 +128,9 @@ pub unsafe fn instantiate(
         host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
         std::ptr::null_mut()
     };
-    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Component, String> {
-        if instance_name.is_null() || name.is_empty() {
-            return Err("the instance name is NULL or empty".into());
+    let result = catch_panic(|| -> Result<Component, String> {
+        if instance_name.is_null() || name.trim().is_empty() {
+            return Err("the instance name is NULL, empty, white space only or not UTF-8 (FMI 2.0 asks for a non-empty name)".into());
         }
         if fmu_type != FMI2_COSIMULATION {
             return Err(format!("fmuType {fmu_type} requested, this FMU supports only fmi2CoSimulation (1)"));
@@ -148,20 +146,12 @@ pub unsafe fn instantiate(
         let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
         let instance = Instance::new(name, guid, model, sink, logging_on != 0).map_err(|e| e.to_string())?;
         Ok(Box::into_raw(Box::new(Wrapper { instance, strings: Vec::new() })) as Component)
-    }));
+    });
     match result {
         Ok(Ok(c)) => c,
         Ok(Err(message)) => fail(message),
-        Err(panic) => fail(format!("internal error ({})", panic_message(&*panic))),
+        Err(why) => fail(format!("internal error ({why})")),
     }
-}
-
-fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
-    panic
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| panic.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "unknown panic".into())
 }
 
 /// `fmi2FreeInstance`.
@@ -170,7 +160,7 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
 /// `c` is NULL or a component from [`instantiate`] not freed before.
 pub unsafe fn free_instance(c: Component) {
     if !c.is_null() {
-        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) })));
+        let _ = catch_panic(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) }));
     }
 }
 

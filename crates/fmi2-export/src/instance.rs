@@ -6,7 +6,8 @@
 //! * a call in a state that does not allow it, or with a bad argument (unknown value
 //!   reference, wrong type, a variable that may not be set now, NaN, a tolerance that is not
 //!   finite and > 0, h <= 0, a wrong communication point, a step past the stop time or to a
-//!   time that is not finite or not later, an FMU state holding numbers that are not finite),
+//!   time that is not finite, not later or beyond the time horizon, an FMU state of another
+//!   instance or model, or holding numbers that are not finite),
 //!   returns `Error` after logging why, and changes nothing: the instance goes on as before
 //!   (as the Modelica Reference-FMUs do);
 //! * a failure of the model itself (invalid parameters at initialization, a step that cannot
@@ -160,22 +161,36 @@ impl Api {
 /// Receives the instance's log messages: status, category, message.
 pub type LogSink = Box<dyn Fn(Status, &str, &str) + Send>;
 
-/// A saved FMU state (`fmi2FMUstate`).
+/// A saved FMU state (`fmi2FMUstate`), bound to the model it was taken from: restoring or
+/// serialising it through an instance of another model is refused.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Snapshot {
+    /// The GUID of the model whose instance saved it.
+    model: std::sync::Arc<str>,
     phase: Phase,
     time: f64,
     start_time: f64,
     values: Values,
-    model: Vec<u8>,
+    /// The model's own part ([`Model::save_state`]).
+    internal: Vec<u8>,
 }
+
+/// The handle of an FMU state held by an instance, as the C APIs pass it (`fmi2FMUstate`,
+/// `fmi3FMUState`): a number, never an address, so a handle the instance did not give out
+/// (of another instance or model, freed, or made up) is found unknown without being read.
+pub type StateHandle = usize;
+
+/// The next handle any instance of this library gives out: handles are never reused, so a
+/// freed one stays unknown.
+static NEXT_STATE_HANDLE: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(1);
 
 /// Why an instance could not be made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum InstantiateError {
-    /// `instanceName` is empty.
-    #[error("the instance name is empty")]
-    EmptyName,
+    /// `instanceName` is empty or white space only (FMI 2.0 and 3.0 ask for at least one
+    /// other character).
+    #[error("the instance name is empty or white space only")]
+    BlankName,
     /// A Real variable's start value is NaN or infinite (the model was built from bad data).
     #[error("the start value of '{name}' is {value}, not a finite number")]
     NonFiniteStart {
@@ -197,7 +212,7 @@ pub enum InstantiateError {
 /// One instance of a model.
 pub struct Instance {
     name: String,
-    guid: String,
+    guid: std::sync::Arc<str>,
     model: Box<dyn Model>,
     values: Values,
     start_values: Values,
@@ -223,6 +238,51 @@ pub struct Instance {
     computed_reals: Vec<u32>,
     /// The C API driving the instance, for the function names in messages.
     api: Api,
+    /// The value reference of the independent variable `time`, kept equal to the instance's
+    /// time so that hosts that record it read the current time.
+    time_variable: Option<u32>,
+    /// The model's nominal communication step ([`ModelDescription::default_experiment`], else
+    /// [`NOMINAL_STEP`]) [s].
+    nominal_step: f64,
+    /// The magnitude of time no step may reach [s]: below it a double resolves the nominal
+    /// step to [`STEP_RESOLUTION`] of itself, so the instance can always go on stepping.
+    time_horizon: f64,
+    /// The FMU states the host holds, by handle; freed with the instance at the latest.
+    states: std::collections::HashMap<StateHandle, Snapshot>,
+}
+
+/// The communication step assumed for a model whose description has no default experiment [s].
+pub const NOMINAL_STEP: f64 = 1e-3;
+
+/// The resolution a step of the nominal size keeps at the [`Instance`]'s time horizon: the
+/// spacing of doubles there is at most this fraction of it.
+pub const STEP_RESOLUTION: f64 = 1.0 / 1024.0;
+
+/// How far apart, in units in the last place of the larger magnitude, two times may be and
+/// still be one communication point: hosts compute points as `t0 + n·h` or by adding `h`, which
+/// leaves them a few ulps from the FMU's own `t + h`.
+pub const TIME_ULPS: f64 = 8.0;
+
+/// The spacing of doubles at the magnitude of `t` (the unit in the last place) [s].
+fn ulp(t: f64) -> f64 {
+    let a = t.abs();
+    if !a.is_finite() {
+        return f64::INFINITY;
+    }
+    f64::from_bits(a.to_bits() + 1) - a
+}
+
+/// Whether `a` and `b` are within [`TIME_ULPS`] of the larger of them.
+fn same_time(a: f64, b: f64) -> bool {
+    (a - b).abs() <= TIME_ULPS * ulp(a.abs().max(b.abs()))
+}
+
+/// The first power of two at which the spacing of doubles exceeds `STEP_RESOLUTION · nominal`
+/// [s]: times below it resolve a step of `nominal` to that fraction.
+fn time_horizon(nominal: f64) -> f64 {
+    let finest = (nominal * STEP_RESOLUTION).log2().floor();
+    // The spacing at 2^e is 2^(e − 52): it stays within 2^finest below 2^(finest + 53).
+    2f64.powf(finest + 53.0)
 }
 
 /// What the hot get/set paths need of a variable, precomputed: its index in the description
@@ -295,14 +355,17 @@ fn phase_from(code: u8) -> Result<Phase, StateError> {
 impl Instance {
     /// A new instance of `model` called `name`, if `guid` is the model's GUID.
     pub fn new(name: &str, guid: &str, model: Box<dyn Model>, log: LogSink, debug_logging: bool) -> Result<Self, InstantiateError> {
-        if name.is_empty() {
-            return Err(InstantiateError::EmptyName);
+        if name.trim().is_empty() {
+            return Err(InstantiateError::BlankName);
         }
         let expected = model.description().guid();
         if guid != expected {
             return Err(InstantiateError::WrongGuid { given: guid.to_owned(), expected });
         }
         let description = model.description();
+        let time_variable = description.variables.iter().find(|v| v.causality == Causality::Independent).map(|v| v.value_reference);
+        let nominal_step =
+            description.default_experiment.as_ref().map(|e| e.step_size).filter(|h| h.is_finite() && *h > 0.0).unwrap_or(NOMINAL_STEP);
         let mut lookup: [Vec<Entry>; 4] = Default::default();
         for (i, v) in description.variables.iter().enumerate() {
             let slot = &mut lookup[v.base_type().slot()];
@@ -329,7 +392,7 @@ impl Instance {
         }
         Ok(Self {
             name: name.to_owned(),
-            guid: expected,
+            guid: expected.into(),
             start_values: values.clone(),
             values,
             model,
@@ -346,7 +409,19 @@ impl Instance {
             lookup,
             computed_reals,
             api: Api::Fmi2,
+            time_variable,
+            nominal_step,
+            time_horizon: time_horizon(nominal_step),
+            states: std::collections::HashMap::new(),
         })
+    }
+
+    /// Moves the instance's time to `t` [s], and the independent variable with it.
+    fn set_time(&mut self, t: f64) {
+        self.time = t;
+        if let Some(vr) = self.time_variable {
+            self.values.reals[vr as usize] = t;
+        }
     }
 
     /// The same instance, naming the functions of `api` in its messages.
@@ -439,6 +514,15 @@ impl Instance {
         if !start_time.is_finite() {
             return self.error(&format!("{}: start time {start_time} is not finite", self.api.name("fmi2SetupExperiment")));
         }
+        if start_time.abs() >= self.time_horizon {
+            return self.error(&format!(
+                "{}: start time {} s is beyond ±{} s, where {}",
+                self.api.name("fmi2SetupExperiment"),
+                show(start_time),
+                show(self.time_horizon),
+                self.horizon_reason()
+            ));
+        }
         if let Some(stop) = stop_time {
             if !(stop >= start_time) {
                 return self
@@ -459,7 +543,7 @@ impl Instance {
         }
         self.start_time = start_time;
         self.stop_time = stop_time;
-        self.time = start_time;
+        self.set_time(start_time);
         Status::Ok
     }
 
@@ -484,7 +568,7 @@ impl Instance {
                     return self.error(&format!("{}: {why}", self.api.name("fmi2ExitInitializationMode")));
                 }
                 self.dirty = false;
-                self.time = self.start_time;
+                self.set_time(self.start_time);
                 self.phase = Phase::StepComplete;
                 Status::Ok
             }
@@ -517,7 +601,7 @@ impl Instance {
         self.phase = Phase::Instantiated;
         self.start_time = 0.0;
         self.stop_time = None;
-        self.time = 0.0;
+        self.set_time(0.0);
         self.dirty = true;
         self.terminated = false;
         self.fixed_step = None;
@@ -734,7 +818,7 @@ impl Instance {
                     self.phase = Phase::Error;
                     return self.error(&format!("{} at t = {current} s: {why}", self.api.name("fmi2DoStep")));
                 }
-                self.time = current + step;
+                self.set_time(current + step);
                 self.dirty = false;
                 Status::Ok
             }
@@ -745,7 +829,7 @@ impl Instance {
                         self.phase = Phase::Error;
                         return self.error(&format!("{} at t = {current} s: {why}", self.api.name("fmi2DoStep")));
                     }
-                    self.time = current + step;
+                    self.set_time(current + step);
                     self.dirty = false;
                     self.phase = Phase::StepFailed;
                     self.terminated = true;
@@ -777,22 +861,18 @@ impl Instance {
         }
     }
 
-    /// Checks the arguments of `fmi2DoStep`: a finite step > 0 from the FMU's own time, ending
-    /// at a later time that a double can hold, and not past the stop time of
-    /// `fmi2SetupExperiment` (beyond a relative 1e-9, as the Reference-FMUs refuse it).
+    /// Checks the arguments of `fmi2DoStep`: a finite step > 0 from the FMU's own time (within
+    /// [`TIME_ULPS`]), ending at a later time within the time horizon, and not past the stop
+    /// time of `fmi2SetupExperiment` (beyond [`TIME_ULPS`]: FMI 2.0 section 4.2.2 and FMI 3.0
+    /// make computing past it an error).
     fn check_step(&self, current: f64, step: f64) -> Result<(), Status> {
+        let function = self.api.name("fmi2DoStep");
         if !(step.is_finite() && step > 0.0) {
-            return Err(self.error(&format!(
-                "{}: communication step size {} must be finite and > 0",
-                self.api.name("fmi2DoStep"),
-                show(step)
-            )));
+            return Err(self.error(&format!("{function}: communication step size {} must be finite and > 0", show(step))));
         }
-        let tolerance = 1e-9 * self.time.abs().max(1.0);
-        if !current.is_finite() || (current - self.time).abs() > tolerance {
+        if !current.is_finite() || !same_time(current, self.time) {
             return Err(self.error(&format!(
-                "{}: currentCommunicationPoint {} differs from the FMU's time {}",
-                self.api.name("fmi2DoStep"),
+                "{function}: currentCommunicationPoint {} differs from the FMU's time {}",
                 show(current),
                 show(self.time)
             )));
@@ -800,25 +880,44 @@ impl Instance {
         let end = current + step;
         if !(end.is_finite() && end > current) {
             return Err(self.error(&format!(
-                "{}: a step of {} s from t = {} s ends at {}, not at a later time a double can hold",
-                self.api.name("fmi2DoStep"),
+                "{function}: a step of {} s from t = {} s ends at {}, not at a later time a double can hold",
                 show(step),
                 show(current),
                 show(end)
             )));
         }
+        if end.abs() >= self.time_horizon {
+            return Err(self.error(&format!(
+                "{function}: a step of {} s from t = {} s would end at {} s, beyond {} s, where {}; the time stays at {} s",
+                show(step),
+                show(current),
+                show(end),
+                show(self.time_horizon),
+                self.horizon_reason(),
+                show(self.time)
+            )));
+        }
         if let Some(stop) = self.stop_time {
-            if end > stop + 1e-9 * stop.abs().max(1.0) {
+            if end > stop && !same_time(end, stop) {
                 return Err(self.error(&format!(
-                    "{}: at t = {} s a step of {} s was requested, past the stop time {} s set at initialization",
-                    self.api.name("fmi2DoStep"),
+                    "{function}: at t = {} s a step of {} s was requested, past the stop time {} s set at initialization (by {} s)",
                     show(current),
                     show(step),
-                    show(stop)
+                    show(stop),
+                    show(end - stop)
                 )));
             }
         }
         Ok(())
+    }
+
+    /// Why times beyond the horizon are refused, for messages.
+    fn horizon_reason(&self) -> String {
+        format!(
+            "a double no longer resolves this FMU's step of {} s to 1/{} of itself (the instance could not go on)",
+            show(self.nominal_step),
+            (1.0 / STEP_RESOLUTION) as u32
+        )
     }
 
     /// The name of the Real variable `vr`, for messages.
@@ -872,9 +971,9 @@ impl Instance {
         Ok(self.terminated)
     }
 
-    /// `fmi2GetFMUstate`. Refused after a failed call left a Real output or local that is not
-    /// a finite number: such a state could not be restored (found by fuzzing: the state was
-    /// saved, then refused by `fmi2DeSerializeFMUstate`).
+    /// `fmi2GetFMUstate` as a value. Refused after a failed call left a Real output or local
+    /// that is not a finite number: such a state could not be restored (found by fuzzing: the
+    /// state was saved, then refused by `fmi2DeSerializeFMUstate`).
     pub fn get_state(&self) -> Result<Snapshot, Status> {
         self.check_phase("fmi2GetFMUstate", Function::FmuState)?;
         if let Some(problem) = self.non_finite_real() {
@@ -882,34 +981,146 @@ impl Instance {
                 "{}: {problem}, left by a failed call; a state holding it could not be restored, so none is saved (restore an earlier state or reset)", self.api.name("fmi2GetFMUstate")
             )));
         }
-        let mut model = Vec::new();
-        self.model.save_state(&mut model);
-        Ok(Snapshot { phase: self.phase, time: self.time, start_time: self.start_time, values: self.values.clone(), model })
+        let mut internal = Vec::new();
+        self.model.save_state(&mut internal);
+        Ok(Snapshot {
+            model: self.guid.clone(),
+            phase: self.phase,
+            time: self.time,
+            start_time: self.start_time,
+            values: self.values.clone(),
+            internal,
+        })
     }
 
-    /// `fmi2SetFMUstate`.
+    /// Refuses a state saved by an instance of another model, or one whose values do not have
+    /// this model's shape.
+    fn check_owner(&self, snapshot: &Snapshot) -> Result<(), String> {
+        if snapshot.model != self.guid {
+            return Err(format!(
+                "the FMU state was saved by an instance of another model (GUID {}), this is {} (GUID {})",
+                snapshot.model,
+                self.description().model_identifier,
+                self.guid
+            ));
+        }
+        let (a, b) = (&snapshot.values, &self.start_values);
+        if (a.reals.len(), a.integers.len(), a.booleans.len(), a.strings.len())
+            != (b.reals.len(), b.integers.len(), b.booleans.len(), b.strings.len())
+        {
+            return Err("the FMU state does not hold this model's variables".into());
+        }
+        Ok(())
+    }
+
+    /// `fmi2SetFMUstate` from a value.
     pub fn set_state(&mut self, snapshot: &Snapshot) -> Status {
         if let Err(s) = self.check_phase("fmi2SetFMUstate", Function::FmuState) {
             return s;
         }
-        if let Err(e) = self.check_snapshot(snapshot) {
+        if let Err(e) = self.check_owner(snapshot).and_then(|()| self.check_snapshot(snapshot)) {
             return self.error(&format!("{}: {e}", self.api.name("fmi2SetFMUstate")));
         }
-        if let Err(e) = self.model.load_state(&snapshot.values, &snapshot.model) {
+        if let Err(e) = self.model.load_state(&snapshot.values, &snapshot.internal) {
             return self.error(&format!("{}: {e}", self.api.name("fmi2SetFMUstate")));
         }
         self.values = snapshot.values.clone();
         self.phase = snapshot.phase;
-        self.time = snapshot.time;
         self.start_time = snapshot.start_time;
+        self.set_time(snapshot.time);
         self.dirty = false;
         self.terminated = false;
         Status::Ok
     }
 
+    /// The state behind `handle`, if this instance gave it out and it was not freed.
+    fn held_state(&self, function: &str, handle: StateHandle) -> Result<&Snapshot, Status> {
+        self.states.get(&handle).ok_or_else(|| {
+            self.error(&format!(
+                "{}: {handle:#x} is not an FMU state of this instance: a state is used with the instance that saved or \
+                 deserialized it, until it or its instance is freed (serialize it to move it to another instance)",
+                self.api.name(function)
+            ))
+        })
+    }
+
+    /// Keeps `snapshot` under `reuse` (a handle this instance gave out, overwritten) or a new
+    /// handle; returns the handle.
+    fn hold_state(&mut self, function: &str, snapshot: Snapshot, reuse: Option<StateHandle>) -> Result<StateHandle, Status> {
+        let handle = match reuse {
+            Some(handle) => {
+                self.held_state(function, handle)?;
+                handle
+            }
+            None => NEXT_STATE_HANDLE.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+        };
+        self.states.insert(handle, snapshot);
+        Ok(handle)
+    }
+
+    /// `fmi2GetFMUstate`: the state saved under a new handle, or under `reuse` (a state this
+    /// instance gave out), which is overwritten.
+    pub fn save_state(&mut self, reuse: Option<StateHandle>) -> Result<StateHandle, Status> {
+        let snapshot = self.get_state()?;
+        self.hold_state("fmi2GetFMUstate", snapshot, reuse)
+    }
+
+    /// `fmi2SetFMUstate` by handle.
+    pub fn restore_state(&mut self, handle: StateHandle) -> Status {
+        if let Err(s) = self.check_phase("fmi2SetFMUstate", Function::FmuState) {
+            return s;
+        }
+        // The instance holds its states; one is taken out while it is restored, and put back.
+        let Some(snapshot) = self.states.remove(&handle) else {
+            return self.held_state("fmi2SetFMUstate", handle).err().unwrap_or(Status::Error);
+        };
+        let status = self.set_state(&snapshot);
+        self.states.insert(handle, snapshot);
+        status
+    }
+
+    /// `fmi2FreeFMUstate`: forgets the state behind `handle`.
+    pub fn free_state(&mut self, handle: StateHandle) -> Status {
+        if let Err(s) = self.check_phase("fmi2FreeFMUstate", Function::FmuState) {
+            return s;
+        }
+        match self.held_state("fmi2FreeFMUstate", handle) {
+            Ok(_) => {
+                self.states.remove(&handle);
+                Status::Ok
+            }
+            Err(s) => s,
+        }
+    }
+
+    /// `fmi2SerializeFMUstate` by handle.
+    pub fn serialize_state(&self, handle: StateHandle) -> Result<Vec<u8>, Status> {
+        self.check_phase("fmi2SerializeFMUstate", Function::FmuState)?;
+        self.serialize(self.held_state("fmi2SerializeFMUstate", handle)?)
+    }
+
+    /// `fmi2DeSerializeFMUstate`: the state read from `bytes` under a new handle, or under
+    /// `reuse` (a state this instance gave out), which is overwritten.
+    pub fn deserialize_state(&mut self, bytes: &[u8], reuse: Option<StateHandle>) -> Result<StateHandle, Status> {
+        if let Some(handle) = reuse {
+            self.check_phase("fmi2DeSerializeFMUstate", Function::FmuState)?;
+            self.held_state("fmi2DeSerializeFMUstate", handle)?;
+        }
+        let snapshot = self.deserialize(bytes)?;
+        self.hold_state("fmi2DeSerializeFMUstate", snapshot, reuse)
+    }
+
+    /// How many FMU states the instance holds for the host.
+    pub fn states_held(&self) -> usize {
+        self.states.len()
+    }
+
     /// `fmi2SerializeFMUstate`: magic, version, GUID, payload, CRC-32.
     pub fn serialize(&self, snapshot: &Snapshot) -> Result<Vec<u8>, Status> {
         self.check_phase("fmi2SerializeFMUstate", Function::FmuState)?;
+        if let Err(e) = self.check_owner(snapshot) {
+            return Err(self.error(&format!("{}: {e}", self.api.name("fmi2SerializeFMUstate"))));
+        }
         let mut out = Vec::new();
         out.extend_from_slice(STATE_MAGIC);
         out.put_u32(STATE_VERSION);
@@ -931,7 +1142,7 @@ impl Instance {
         for s in &snapshot.values.strings {
             p.put_bytes(s.as_bytes());
         }
-        p.put_bytes(&snapshot.model);
+        p.put_bytes(&snapshot.internal);
         out.put_u64(p.len() as u64);
         out.extend_from_slice(&p);
         let crc = crc32fast::hash(&out);
@@ -987,12 +1198,13 @@ impl Instance {
         let strings = (0..n)
             .map(|_| String::from_utf8(p.bytes()?.to_vec()).map_err(|_| invalid("a string is not UTF-8".into())))
             .collect::<Result<_, _>>()?;
-        let model = p.bytes()?.to_vec();
+        let internal = p.bytes()?.to_vec();
         p.finish()?;
         if phase == Phase::Fatal {
             return Err(invalid("a state saved in the fatal state cannot be restored".into()));
         }
-        let snapshot = Snapshot { phase, time, start_time, values: Values { reals, integers, booleans, strings }, model };
+        let values = Values { reals, integers, booleans, strings };
+        let snapshot = Snapshot { model: self.guid.clone(), phase, time, start_time, values, internal };
         self.check_snapshot(&snapshot).map_err(invalid)?;
         Ok(snapshot)
     }

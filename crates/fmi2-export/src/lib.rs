@@ -12,8 +12,10 @@
 //! - the state machine of FMI 2.0 section 4.2.4 and argument checks ([`instance`]): a call in
 //!   the wrong state or with a bad argument (unknown value reference, wrong type, a variable
 //!   that may not be set now, NaN, a step of 0) returns `fmi2Error` and logs why;
-//! - FMU states (`fmi2GetFMUstate`, `fmi2SetFMUstate`) and their serialisation, versioned,
-//!   bound to the GUID and checksummed ([`codec`] for a model's own part);
+//! - FMU states (`fmi2GetFMUstate`, `fmi2SetFMUstate`), held by the instance that saved them
+//!   behind numeric handles (a foreign handle is refused, never read; states left unfreed go
+//!   with the instance), and their serialisation, versioned, bound to the GUID and checksummed
+//!   ([`codec`] for a model's own part);
 //! - the GUID, a hash of the model description, checked at instantiation;
 //! - units declared by the models that use them ([`Unit`]): `UnitDefinitions` lists those;
 //! - packaging into a `.fmu` ([`package`], feature `package`, on by default).

@@ -5,10 +5,11 @@
 
 use std::ffi::{c_char, c_void, CStr};
 
-use crate::instance::{Api, Function, Instance, Snapshot, Status};
+use crate::instance::{Api, Function, Instance, StateHandle, Status};
 
-/// An FMU state handle as both C APIs pass it (`fmi2FMUstate`, `fmi3FMUState`): a boxed
-/// [`Snapshot`].
+/// An FMU state handle as both C APIs pass it (`fmi2FMUstate`, `fmi3FMUState`): a
+/// [`StateHandle`] of the instance, never an address (the instance keeps its states and frees
+/// those left with it).
 pub type FmuState = *mut c_void;
 
 /// A string argument, or `None` for NULL or text that is not UTF-8.
@@ -64,114 +65,197 @@ fn state_word(instance: &Instance) -> &'static str {
     }
 }
 
-unsafe fn store_state(state: *mut FmuState, snap: Snapshot) {
-    unsafe {
-        if (*state).is_null() {
-            *state = Box::into_raw(Box::new(snap)) as FmuState;
-        } else {
-            *(*state as *mut Snapshot) = snap;
-        }
-    }
-}
-
-/// Get FMU state: a new state in `*state`, or the one it points to overwritten.
+/// The handle `*state` holds on entry: `None` for NULL (a new state is wanted).
 ///
 /// # Safety
-/// `state` is NULL or points to NULL or to a state of this FMU.
+/// `state` points to a readable handle.
+unsafe fn handle_in(state: *mut FmuState) -> Option<StateHandle> {
+    let handle = unsafe { *state } as StateHandle;
+    (handle != 0).then_some(handle)
+}
+
+/// Get FMU state: a new state in `*state`, or the one it holds (a state of this instance)
+/// overwritten.
+///
+/// # Safety
+/// `state` is NULL or points to a writable handle.
 pub unsafe fn get_fmu_state(instance: &mut Instance, state: *mut FmuState) -> Status {
     if state.is_null() {
         return null_argument(instance, "fmi2GetFMUstate", state_word(instance));
     }
-    match instance.get_state() {
-        Ok(snap) => {
-            unsafe { store_state(state, snap) };
+    match instance.save_state(unsafe { handle_in(state) }) {
+        Ok(handle) => {
+            unsafe { *state = handle as FmuState };
             Status::Ok
         }
         Err(s) => s,
     }
 }
 
-/// Set FMU state.
-///
-/// # Safety
-/// `state` is NULL or a state of this FMU (from get or deserialise).
-pub unsafe fn set_fmu_state(instance: &mut Instance, state: FmuState) -> Status {
-    match unsafe { (state as *const Snapshot).as_ref() } {
-        Some(snap) => instance.set_state(snap),
-        None => null_argument(instance, "fmi2SetFMUstate", state_word(instance)),
+/// Set FMU state: `state` must be a handle this instance gave out and has not freed; the
+/// handle is a number, never read through.
+pub fn set_fmu_state(instance: &mut Instance, state: FmuState) -> Status {
+    if state.is_null() {
+        return null_argument(instance, "fmi2SetFMUstate", state_word(instance));
     }
+    instance.restore_state(state as StateHandle)
 }
 
-/// Free FMU state: frees `*state` and sets it to NULL.
+/// Free FMU state: frees `*state` (a state of this instance) and sets it to NULL; NULL or a
+/// pointer to NULL is nothing to free.
 ///
 /// # Safety
-/// `state` is NULL or points to NULL or to a state of this FMU.
+/// `state` is NULL or points to a writable handle.
 pub unsafe fn free_fmu_state(instance: &mut Instance, state: *mut FmuState) -> Status {
     if let Err(s) = instance.check_phase("fmi2FreeFMUstate", Function::FmuState) {
         return s;
     }
-    unsafe {
-        if !state.is_null() && !(*state).is_null() {
-            drop(Box::from_raw(*state as *mut Snapshot));
-            *state = std::ptr::null_mut();
-        }
+    if state.is_null() {
+        return Status::Ok;
     }
-    Status::Ok
+    let Some(handle) = (unsafe { handle_in(state) }) else { return Status::Ok };
+    let status = instance.free_state(handle);
+    if status == Status::Ok {
+        unsafe { *state = std::ptr::null_mut() };
+    }
+    status
 }
 
 /// Serialised FMU state size [bytes] into `*size`.
 ///
 /// # Safety
-/// `state` is NULL or a state of this FMU; `size` is NULL or writable.
+/// `size` is NULL or writable.
 pub unsafe fn serialized_fmu_state_size(instance: &mut Instance, state: FmuState, size: *mut usize) -> Status {
-    match (unsafe { (state as *const Snapshot).as_ref() }, size.is_null()) {
-        (Some(snap), false) => match instance.serialize(snap) {
-            Ok(bytes) => {
-                unsafe { *size = bytes.len() };
-                Status::Ok
-            }
-            Err(s) => s,
-        },
-        _ => null_argument(instance, "fmi2SerializedFMUstateSize", &format!("{} or size", state_word(instance))),
+    if state.is_null() || size.is_null() {
+        return null_argument(instance, "fmi2SerializedFMUstateSize", &format!("{} or size", state_word(instance)));
+    }
+    match instance.serialize_state(state as StateHandle) {
+        Ok(bytes) => {
+            unsafe { *size = bytes.len() };
+            Status::Ok
+        }
+        Err(s) => s,
     }
 }
 
 /// Serialise FMU state into `out`, whose `size` must be the one the size function gave.
 ///
 /// # Safety
-/// `state` is NULL or a state of this FMU; `out` is NULL or `size` writable bytes.
+/// `out` is NULL or `size` writable bytes.
 pub unsafe fn serialize_fmu_state(instance: &mut Instance, state: FmuState, out: *mut u8, size: usize) -> Status {
-    match (unsafe { (state as *const Snapshot).as_ref() }, unsafe { slice_mut(out, size) }) {
-        (Some(snap), Some(out)) => match instance.serialize(snap) {
-            Ok(bytes) if bytes.len() == out.len() => {
-                out.copy_from_slice(&bytes);
-                Status::Ok
-            }
-            Ok(bytes) => instance.error(&format!(
-                "{}: size {size} given, the state needs {} bytes",
-                instance.api().name("fmi2SerializeFMUstate"),
-                bytes.len()
-            )),
-            Err(s) => s,
-        },
-        _ => null_argument(instance, "fmi2SerializeFMUstate", &format!("{} or serializedState", state_word(instance))),
+    let out = unsafe { slice_mut(out, size) };
+    let (false, Some(out)) = (state.is_null(), out) else {
+        return null_argument(instance, "fmi2SerializeFMUstate", &format!("{} or serializedState", state_word(instance)));
+    };
+    match instance.serialize_state(state as StateHandle) {
+        Ok(bytes) if bytes.len() == out.len() => {
+            out.copy_from_slice(&bytes);
+            Status::Ok
+        }
+        Ok(bytes) => instance.error(&format!(
+            "{}: size {size} given, the state needs {} bytes",
+            instance.api().name("fmi2SerializeFMUstate"),
+            bytes.len()
+        )),
+        Err(s) => s,
     }
 }
 
-/// Deserialise FMU state: a truncated, altered or foreign buffer is refused.
+/// Deserialise FMU state: a truncated, altered or foreign buffer is refused; the state goes to
+/// a new handle in `*state`, or overwrites the state of this instance it holds.
 ///
 /// # Safety
-/// `bytes` is NULL or `size` readable bytes; `state` is NULL or points to NULL or to a state
-/// of this FMU.
+/// `bytes` is NULL or `size` readable bytes; `state` is NULL or points to a writable handle.
 pub unsafe fn deserialize_fmu_state(instance: &mut Instance, bytes: *const u8, size: usize, state: *mut FmuState) -> Status {
     match (unsafe { slice(bytes, size) }, state.is_null()) {
-        (Some(bytes), false) => match instance.deserialize(bytes) {
-            Ok(snap) => {
-                unsafe { store_state(state, snap) };
+        (Some(bytes), false) => match instance.deserialize_state(bytes, unsafe { handle_in(state) }) {
+            Ok(handle) => {
+                unsafe { *state = handle as FmuState };
                 Status::Ok
             }
             Err(s) => s,
         },
         _ => null_argument(instance, "fmi2DeSerializeFMUstate", &format!("serializedState or {}", state_word(instance))),
     }
+}
+
+thread_local! {
+    /// Set while [`catch_panic`] runs its closure on this thread: a panic then is the FMU's to
+    /// report through the host's logger, not on the host's stderr.
+    static CATCHING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    /// Where the last panic caught on this thread happened. Plain bytes, not a `String`: a
+    /// thread-local that needs dropping makes std allocate its destructor list, a block left
+    /// behind when the host unloads the library.
+    static PANIC_AT: std::cell::Cell<Place> = const { std::cell::Cell::new(Place::NONE) };
+}
+
+/// A source location kept without allocating: the file name's first bytes and the line.
+#[derive(Clone, Copy)]
+struct Place {
+    file: [u8; 112],
+    len: u8,
+    line: u32,
+}
+
+impl Place {
+    const NONE: Place = Place { file: [0; 112], len: 0, line: 0 };
+
+    fn of(location: &std::panic::Location<'_>) -> Place {
+        let mut place = Place { line: location.line(), ..Place::NONE };
+        let name = location.file().as_bytes();
+        let n = name.len().min(place.file.len());
+        place.file[..n].copy_from_slice(&name[..n]);
+        place.len = n as u8;
+        place
+    }
+
+    /// `file:line`, or nothing when no place was noted.
+    fn text(&self) -> String {
+        match self.len {
+            0 => String::new(),
+            n => format!("{}:{}", String::from_utf8_lossy(&self.file[..n as usize]), self.line),
+        }
+    }
+}
+
+/// A panic hook as `std::panic::take_hook` returns it.
+type Hook = Box<dyn Fn(&std::panic::PanicHookInfo<'_>) + Sync + Send + 'static>;
+
+/// Installs, once, a panic hook that keeps panics inside [`catch_panic`] off stderr (the host's
+/// console) and notes where they happened; any other panic goes to the hook that was there.
+/// Neither hook owns heap memory of this library (the default hook and a closure that captures
+/// nothing are zero-sized), so unloading the library leaves no block behind (valgrind).
+fn quiet_caught_panics() {
+    static PREVIOUS: std::sync::OnceLock<Hook> = std::sync::OnceLock::new();
+    PREVIOUS.get_or_init(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(|info| {
+            if CATCHING.with(|c| c.get()) {
+                PANIC_AT.with(|p| p.set(info.location().map_or(Place::NONE, Place::of)));
+            } else if let Some(previous) = PREVIOUS.get() {
+                previous(info);
+            }
+        }));
+        previous
+    });
+}
+
+/// Runs `body`, turning a panic into its message and place (`Err`), so that no panic unwinds
+/// into the host and none is printed on its console: the caller logs it through the host.
+pub fn catch_panic<R>(body: impl FnOnce() -> R) -> Result<R, String> {
+    quiet_caught_panics();
+    let was = CATCHING.with(|c| c.replace(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(body));
+    CATCHING.with(|c| c.set(was));
+    result.map_err(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        match PANIC_AT.with(|p| p.replace(Place::NONE)).text() {
+            at if at.is_empty() => message,
+            at => format!("{message}, at {at}"),
+        }
+    })
 }

@@ -1,5 +1,6 @@
-//! No panic crosses the C ABI: a model that panics gives fmi2Fatal (and a log entry), after
-//! which the instance only refuses, and a factory that panics gives NULL.
+//! No panic crosses the C ABI: a model that panics gives fmi2Fatal (and a log entry naming the
+//! place), after which the instance only refuses, and a factory that panics gives NULL. Nothing
+//! of it is printed on the host's console: the host hears of it through its logger.
 
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::Path;
@@ -75,7 +76,11 @@ fn panics_become_fatal_and_never_unwind_into_the_host() {
         assert_eq!(abi::enter_initialization_mode(c), 0);
         assert_eq!(abi::exit_initialization_mode(c), 0);
         assert_eq!(abi::do_step(c, 0.0, 0.1, 1), 4, "fmi2Fatal");
-        assert!(LOG.lock().unwrap().iter().any(|m| m.contains("fmi2DoStep: internal error (boom in do_step)")));
+        assert!(LOG
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|m| m.contains("fmi2DoStep: internal error (boom in do_step, at ") && m.contains("fmi_panics.rs:")));
         // Afterwards every call is refused with fmi2Fatal; freeing still works.
         assert_eq!(abi::do_step(c, 0.0, 0.1, 1), 4);
         assert_eq!(abi::reset(c), 4);
@@ -85,6 +90,28 @@ fn panics_become_fatal_and_never_unwind_into_the_host() {
 
         let c = abi::instantiate(exploding_factory, name.as_ptr(), 1, guid.as_ptr(), uri.as_ptr(), &callbacks, 0, 0);
         assert!(c.is_null());
-        assert!(LOG.lock().unwrap().iter().any(|m| m.contains("fmi2Instantiate: internal error (factory exploded)")));
+        assert!(LOG.lock().unwrap().iter().any(|m| m.contains("fmi2Instantiate: internal error (factory exploded, at ")));
     }
+}
+
+#[test]
+fn a_caught_panic_prints_nothing_on_the_hosts_console() {
+    // This test program, run again with only the test above and its output not captured: the
+    // panics it causes inside the FMU calls must not reach stderr.
+    if std::env::var_os("NEURARM_PANIC_CHILD").is_some() {
+        return;
+    }
+    let exe = std::env::current_exe().unwrap();
+    let run = |filter: &str| {
+        std::process::Command::new(&exe)
+            .args([filter, "--exact", "--nocapture", "--test-threads=1"])
+            .env("NEURARM_PANIC_CHILD", "1")
+            .output()
+            .unwrap()
+    };
+    let out = run("panics_become_fatal_and_never_unwind_into_the_host");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed"), "the test ran");
+    assert!(!stderr.contains("boom") && !stderr.contains("exploded") && !stderr.contains("panicked"), "{stderr}");
 }

@@ -94,18 +94,22 @@ fn steps_past_the_stop_time_or_that_do_not_move_the_time_are_refused_and_change_
     for h in [1.5, 1e300, 1.0 + 1e-6] {
         assert_eq!(i.do_step(0.0, h), Status::Error, "h = {h}");
     }
-    assert!(logged(&log, "at t = 0 s a step of 1e300 s was requested, past the stop time 1 s"));
+    assert!(logged(&log, "at t = 0 s a step of 1.5 s was requested, past the stop time 1 s set at initialization (by 0.5 s)"));
+    assert!(logged(&log, "a step of 1e300 s from t = 0 s would end at 1e300 s, beyond 8589934592 s"));
     assert_eq!(i.time(), 0.0);
     assert_eq!(i.do_step(0.0, 0.5), Status::Ok);
-    assert_eq!(i.do_step(0.5, 0.5 + 1e-12), Status::Ok, "within the relative tolerance of the stop time");
+    assert_eq!(i.do_step(0.5, 0.5 + 1e-12), Status::Error, "1e-12 s is 4504 ulps past the stop time");
+    assert_eq!(i.do_step(0.5, 0.5 + f64::EPSILON), Status::Ok, "one ulp past is rounding");
     // After fmi2Reset the stop time is gone with the experiment.
     assert_eq!(i.reset(), Status::Ok);
-    assert_eq!(i.setup_experiment(None, 1e17, None), Status::Ok);
+    assert_eq!(i.setup_experiment(None, 1e17, None), Status::Error, "beyond the time horizon");
+    assert_eq!(i.setup_experiment(None, 1e9, None), Status::Ok);
     assert_eq!(i.enter_initialization_mode(), Status::Ok);
     assert_eq!(i.exit_initialization_mode(), Status::Ok);
-    assert_eq!(i.do_step(1e17, 1e-3), Status::Error, "1e17 + 1e-3 is 1e17");
-    assert!(logged(&log, "a step of 0.001 s from t = 1e17 s ends at 1e17, not at a later time a double can hold"));
-    assert_eq!(i.do_step(1e17, 100.0), Status::Ok);
+    assert_eq!(i.do_step(1e9, 1e-20), Status::Error, "1e9 + 1e-20 is 1e9");
+    assert!(logged(&log, "a step of 1e-20 s from t = 1000000000 s ends at 1000000000, not at a later time a double can hold"));
+    assert_eq!(i.do_step(1e9, 100.0), Status::Ok);
+    assert_eq!(i.do_step(1e9 + 100.0, 1e-3), Status::Ok);
 }
 
 #[test]
@@ -160,11 +164,12 @@ fn states_with_numbers_that_are_not_finite_are_refused_by_the_layer_and_the_mode
         b
     };
     let (u, y_and_sum, time, start) = (find(0.625), find(1.25), find(0.75), find(0.5));
-    assert_eq!((u.len(), y_and_sum.len(), time.len(), start.len()), (1, 2, 1, 1));
+    assert_eq!((u.len(), y_and_sum.len(), time.len(), start.len()), (1, 2, 2, 1), "the time also as the variable `time`");
     for (at, why) in [
         (u[0], "the state holds NaN for 'u'"),
         (y_and_sum[0], "the state holds NaN for 'y'"),
         (time[0], "the state's time is NaN"),
+        (time[1], "the state holds NaN for 'time'"),
         (start[0], "the state's start time is NaN"),
     ] {
         assert!(i.deserialize(&alter(at, f64::NAN)).is_err());

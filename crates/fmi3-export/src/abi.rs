@@ -12,11 +12,10 @@
 //! The functions are public for that macro and for tests; a model author calls none of them.
 
 use std::ffi::{c_char, c_int, c_void, CString};
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
 
 use fmi2_export::instance::{Api, Function, Instance, LogSink, Phase, Status};
-use fmi2_export::raw::{self, slice, slice_mut, str_arg};
+use fmi2_export::raw::{self, catch_panic, slice, slice_mut, str_arg};
 use fmi2_export::ModelFactory;
 
 use crate::description::{Fmi3Type, Fmi3Variables};
@@ -95,14 +94,6 @@ impl Wrapper {
 // SAFETY (for all functions below): the host passes pointers as the FMI 3.0 standard
 // describes them; arrays have the lengths given with them.
 
-fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
-    panic
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| panic.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "unknown panic".into())
-}
-
 /// Runs `body` on the instance behind `c`, turning a panic into `fmi3Fatal`.
 unsafe fn with(c: Fmi3Instance, name: &str, body: impl FnOnce(&mut Wrapper) -> Status) -> RawStatus {
     if c.is_null() {
@@ -114,10 +105,9 @@ unsafe fn with(c: Fmi3Instance, name: &str, body: impl FnOnce(&mut Wrapper) -> S
         return Status::Fatal as c_int;
     }
     wrapper.instance.trace(|| name.to_string());
-    match catch_unwind(AssertUnwindSafe(|| body(&mut *wrapper))) {
+    match catch_panic(|| body(&mut *wrapper)) {
         Ok(s) => s as c_int,
-        Err(panic) => {
-            let why = panic_message(&*panic);
+        Err(why) => {
             wrapper.instance.error(&format!("{name}: internal error ({why}); the instance can only be freed"));
             wrapper.instance.set_fatal();
             Status::Fatal as c_int
@@ -156,10 +146,12 @@ pub unsafe fn instantiate_co_simulation(
         host().log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {message}"));
         std::ptr::null_mut()
     };
-    let result = catch_unwind(AssertUnwindSafe(|| -> Result<Fmi3Instance, String> {
+    let result = catch_panic(|| -> Result<Fmi3Instance, String> {
         let name = unsafe { str_arg(instance_name) }.unwrap_or("");
-        if name.is_empty() {
-            return Err("the instance name is NULL, empty or not UTF-8".into());
+        if name.trim().is_empty() {
+            return Err(
+                "the instance name is NULL, empty, white space only or not UTF-8 (FMI 3.0 asks for at least one other character)".into()
+            );
         }
         if event_mode_used {
             return Err("eventModeUsed is true, but this FMU has no event mode (hasEventMode=\"false\")".into());
@@ -178,11 +170,11 @@ pub unsafe fn instantiate_co_simulation(
             .map_err(|e| e.to_string().replace("GUID", "instantiation token"))?
             .with_api(Api::Fmi3);
         Ok(Box::into_raw(Box::new(Wrapper { instance, variables, scratch: Vec::new(), strings: Vec::new() })) as Fmi3Instance)
-    }));
+    });
     match result {
         Ok(Ok(c)) => c,
         Ok(Err(message)) => fail(message),
-        Err(panic) => fail(format!("internal error ({})", panic_message(&*panic))),
+        Err(why) => fail(format!("internal error ({why})")),
     }
 }
 
@@ -193,9 +185,7 @@ pub unsafe fn instantiate_co_simulation(
 /// `log_message` is NULL or the host's logger for `instance_environment`.
 pub unsafe fn instantiate_other(function: &str, instance_environment: *mut c_void, log_message: Option<LogMessage>) -> Fmi3Instance {
     let host = HostLogger { logger: log_message, environment: instance_environment };
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        host.log(Status::Error, "logStatusError", &format!("{function}: this FMU supports only Co-Simulation"))
-    }));
+    let _ = catch_panic(|| host.log(Status::Error, "logStatusError", &format!("{function}: this FMU supports only Co-Simulation")));
     std::ptr::null_mut()
 }
 
@@ -205,7 +195,7 @@ pub unsafe fn instantiate_other(function: &str, instance_environment: *mut c_voi
 /// `c` is NULL or an instance from [`instantiate_co_simulation`] not freed before.
 pub unsafe fn free_instance(c: Fmi3Instance) {
     if !c.is_null() {
-        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) })));
+        let _ = catch_panic(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) }));
     }
 }
 

@@ -85,3 +85,22 @@ fn the_intended_speed_is_the_measured_one_plus_the_horizon_times_the_commanded_a
     set(&mut ctl, &names("tau_comp", n), &[0.0; 4]);
     assert_eq!(get(&mut ctl, &names("qd_intended", n)), intended);
 }
+
+#[test]
+fn a_time_at_which_the_reference_overflows_fails_initialization_by_name() {
+    // The FMU layer refuses such a start time before the model sees it; the model still
+    // refuses it on its own, for a host of the model that is not that layer.
+    let model = ArmParams::default_four_link().frictionless();
+    let spec = ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
+        model,
+        gains: TaskSpaceGains::default(),
+        centre: [0.45, 0.1],
+        scale: 1.0,
+        q_start: vec![-0.4, 0.9, 0.7, 0.5],
+    });
+    let mut built = FmuSpec { identifier: "Ctl".into(), model: spec }.build_from(None).unwrap();
+    let mut values = fmi2_export::Values::start(built.description());
+    let e = built.initialize(&mut values, 1.7e308).expect_err("refused").to_string();
+    assert!(e.contains("the reference at t = 1.7e308 s is not finite"), "{e}");
+    assert!(built.initialize(&mut values, 0.0).is_ok());
+}

@@ -1,12 +1,15 @@
 /* A plain C FMI 2.0 host, as a C tool chain would use an FMU: dlopen the binary, resolve the
  * functions by their standard names, run instantiate -> initialize -> steps -> free.
  *
- * usage: host BINARY GUID RESOURCE_URI RUNS STEPS VR_TAU1 VR_Q1
- * Prints q_1 after the last run with 17 significant digits. Exit status 0 on success. */
+ * usage: host BINARY GUID RESOURCE_URI RUNS STEPS VR_TAU1 VR_Q1 [STATES]
+ * With STATES, each run also takes that many FMU states (every second one serialized and read
+ * back into another) and frees none of them: fmi2FreeInstance must. Prints q_1 after the last
+ * run with 17 significant digits. Exit status 0 on success. */
 #include <dlfcn.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 typedef void *fmi2Component;
 typedef unsigned int fmi2ValueReference;
@@ -50,8 +53,8 @@ static const char *names[] = {
     } while (0)
 
 int main(int argc, char **argv) {
-    if (argc != 8) {
-        fprintf(stderr, "usage: host BINARY GUID RESOURCE_URI RUNS STEPS VR_TAU1 VR_Q1\n");
+    if (argc != 8 && argc != 9) {
+        fprintf(stderr, "usage: host BINARY GUID RESOURCE_URI RUNS STEPS VR_TAU1 VR_Q1 [STATES]\n");
         return 2;
     }
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
@@ -78,6 +81,12 @@ int main(int argc, char **argv) {
     fmi2Status (*get_real)(fmi2Component, const fmi2ValueReference *, size_t, double *) =
         (fmi2Status(*)(fmi2Component, const fmi2ValueReference *, size_t, double *))dlsym(lib, "fmi2GetReal");
     fmi2Status (*do_step)(fmi2Component, double, double, int) = (fmi2Status(*)(fmi2Component, double, double, int))dlsym(lib, "fmi2DoStep");
+    fmi2Status (*get_state)(fmi2Component, void **) = (fmi2Status(*)(fmi2Component, void **))dlsym(lib, "fmi2GetFMUstate");
+    fmi2Status (*state_size)(fmi2Component, void *, size_t *) = (fmi2Status(*)(fmi2Component, void *, size_t *))dlsym(lib, "fmi2SerializedFMUstateSize");
+    fmi2Status (*serialize)(fmi2Component, void *, char *, size_t) = (fmi2Status(*)(fmi2Component, void *, char *, size_t))dlsym(lib, "fmi2SerializeFMUstate");
+    fmi2Status (*deserialize)(fmi2Component, const char *, size_t, void **) =
+        (fmi2Status(*)(fmi2Component, const char *, size_t, void **))dlsym(lib, "fmi2DeSerializeFMUstate");
+    int states = argc == 9 ? atoi(argv[8]) : 0;
 
     int runs = atoi(argv[4]), steps = atoi(argv[5]);
     fmi2ValueReference tau = (fmi2ValueReference)atoi(argv[6]), q = (fmi2ValueReference)atoi(argv[7]);
@@ -96,6 +105,19 @@ int main(int argc, char **argv) {
         CHECK(set_real(c, &tau, 1, &torque));
         for (int k = 0; k < steps; k++) CHECK(do_step(c, k * 1e-3, 1e-3, 1));
         CHECK(get_real(c, &q, 1, &q_last));
+        for (int k = 0; k < states; k++) {
+            void *state = NULL;
+            CHECK(get_state(c, &state));
+            if (k % 2 == 1) {
+                size_t size = 0;
+                CHECK(state_size(c, state, &size));
+                char *bytes = malloc(size);
+                CHECK(serialize(c, state, bytes, size));
+                void *copy = NULL;
+                CHECK(deserialize(c, bytes, size, &copy));
+                free(bytes);
+            }
+        }
         CHECK(terminate(c));
         free_instance(c);
     }

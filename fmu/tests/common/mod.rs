@@ -181,7 +181,7 @@ pub struct Instance {
     pub api: Arc<Api>,
     pub c: C,
     pub log: Box<Log>,
-    _callbacks: Box<Callbacks>,
+    pub _callbacks: Box<Callbacks>,
 }
 
 unsafe impl Send for Instance {}
