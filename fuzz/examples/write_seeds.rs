@@ -76,4 +76,11 @@ record_every = 10
     let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
     gz.write_all(&short).expect("compress");
     put("csv_table", "torques-gz", &[&[3u8][..], &gz.finish().expect("compress")].concat());
+    // Two models (the same one, or two) at their phases, then a few moves of the host.
+    let n = fixtures().len() as u8;
+    for a in 0..n {
+        for b in [a, (a + 1) % n] {
+            put("foreign_state", &format!("{a}-{b}"), &[a, b, 2 + 3 * 2, 0, 0, 0, 2, 0, 0, 0, 3, 0, 1, 4, 0, 1, 2, 0, 0, 3]);
+        }
+    }
 }
