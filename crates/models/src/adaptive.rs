@@ -384,7 +384,7 @@ impl AdaptiveCompensatorModel {
                 None => (use_gravity, law.gain_gravity, law.bound_gravity, row.output),
             };
             // A friction row does not learn at rest: its output is 0 there whatever the weights
-            // (see the compensator's compute).
+            // (`EncodedNet::friction_torque`).
             if !used || row.friction_net.is_some() && values[self.core.ports.qd[joint]] == 0.0 {
                 continue;
             }

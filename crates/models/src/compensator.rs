@@ -286,17 +286,9 @@ impl NetCompensator {
         }
         let p = &self.ports;
         for i in 0..p.joints() {
-            // At rest (a measured speed of exactly 0) no friction torque, as the law the nets
-            // learn gives (the torque on a joint at rest is stiction's, decided by the arm):
-            // the identification has no samples at zero speed, so a net's value there is an
-            // extrapolation between its two branches (up to 5 % of the Coulomb level, found on
-            // arms of the random family), which on a stuck joint acts as a constant bias.
-            let speed = values[p.qd[i]];
-            let friction = if use_friction && speed != 0.0 {
-                let (mut out, mut feature) = ([0.0], [0.0]);
+            let friction = if use_friction {
                 let net = &self.friction[i];
-                net.evaluate_into(&[speed], &mut feature, &mut self.hidden[..net.hidden()], &mut out);
-                out[0]
+                net.friction_torque(values[p.qd[i]], &mut self.hidden[..net.hidden()])
             } else {
                 0.0
             };

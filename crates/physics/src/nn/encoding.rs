@@ -167,6 +167,19 @@ impl EncodedNet {
         self.mlp.evaluate_into(features, hidden, out);
     }
 
+    /// A friction net's torque at joint speed `speed` [rad/s] → [N·m], with `hidden` (length H)
+    /// as scratch; allocates nothing. Exactly 0 at a speed of exactly 0: the torque on a joint at
+    /// rest is stiction's, decided by the arm, and the net never saw that speed (its value there
+    /// is an extrapolation between its two branches, which on a stuck joint acts as a bias).
+    pub fn friction_torque(&self, speed: f64, hidden: &mut [f64]) -> f64 {
+        if speed == 0.0 {
+            return 0.0;
+        }
+        let (mut feature, mut out) = ([0.0], [0.0]);
+        self.evaluate_into(&[speed], &mut feature, hidden, &mut out);
+        out[0]
+    }
+
     /// Evaluates one sample (original units).
     pub fn evaluate(&self, x: &[f64]) -> Vec<f64> {
         let mut features = vec![0.0; self.features()];
