@@ -502,7 +502,9 @@ impl Simulation {
     fn do_step(&mut self, u: usize, t: f64, h: f64) -> Result<(), MasterError> {
         let unit = &mut self.units[u];
         let mark = capture::mark();
-        let call = format!("{}DoStep", unit.version().prefix());
+        // Named only when a step fails: a step of the run allocates nothing.
+        let prefix = unit.version().prefix();
+        let call = || format!("{prefix}DoStep");
         match unit.do_step(t, h) {
             Ok(Stepped::Completed) => Ok(()),
             // FMI 2.0 says a step completed before the request to end through
@@ -520,6 +522,7 @@ impl Simulation {
                 Ok(())
             }
             Ok(Stepped::Discarded(status)) => {
+                let call = call();
                 let mut e = unit.fail(crate::unit::CallError { call: call.clone(), status: "Discard".into() }, mark, Some(t));
                 e.message = match (status.terminated, status.last_successful_time) {
                     (Some(true), _) => format!("the unit asks to end the simulation ({call} returned with the request to terminate)"),

@@ -79,6 +79,8 @@ pub(crate) struct Unit {
     instance: Instance,
     /// Scratch for FMI 2.0 integer and Boolean calls.
     scratch: Vec<i32>,
+    /// Scratch for FMI 3.0 Boolean calls (C `bool`s), kept so a step allocates nothing.
+    booleans: Vec<bool>,
     /// The import (its unpacked folder and library), kept while the instance lives.
     _import: Box<dyn std::any::Any>,
 }
@@ -126,7 +128,7 @@ impl Unit {
                 (Instance::V3 { instance: Box::new(instance), types }, Box::new(import) as Box<dyn std::any::Any>)
             }
         };
-        Ok(Self { name: plan.name.clone(), instance, scratch: Vec::new(), _import: import })
+        Ok(Self { name: plan.name.clone(), instance, scratch: Vec::new(), booleans: Vec::new(), _import: import })
     }
 
     /// The FMI version of the unit's API.
@@ -296,9 +298,10 @@ impl Unit {
         match &mut self.instance {
             Instance::V2(i) => i.get_boolean(vrs, out).map(drop).map_err(|e| CallError::new("fmi2GetBoolean", e)),
             Instance::V3 { instance, .. } => {
-                let mut x = vec![false; vrs.len()];
-                instance.get_boolean(vrs, &mut x).map_err(|e| CallError::new("fmi3GetBoolean", e))?;
-                for (o, b) in out.iter_mut().zip(x) {
+                self.booleans.clear();
+                self.booleans.resize(vrs.len(), false);
+                instance.get_boolean(vrs, &mut self.booleans).map_err(|e| CallError::new("fmi3GetBoolean", e))?;
+                for (o, &b) in out.iter_mut().zip(&self.booleans) {
                     *o = i32::from(b);
                 }
                 Ok(())
@@ -311,8 +314,9 @@ impl Unit {
         match &mut self.instance {
             Instance::V2(i) => i.set_boolean(vrs, values).map(drop).map_err(|e| CallError::new("fmi2SetBoolean", e)),
             Instance::V3 { instance, .. } => {
-                let x: Vec<bool> = values.iter().map(|&b| b != 0).collect();
-                instance.set_boolean(vrs, &x).map(drop).map_err(|e| CallError::new("fmi3SetBoolean", e))
+                self.booleans.clear();
+                self.booleans.extend(values.iter().map(|&b| b != 0));
+                instance.set_boolean(vrs, &self.booleans).map(drop).map_err(|e| CallError::new("fmi3SetBoolean", e))
             }
         }
     }
