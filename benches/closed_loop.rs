@@ -25,10 +25,10 @@
 use std::path::PathBuf;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use fmi2_cosim::System;
 use nalgebra::DMatrix;
 use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Arms, Settings};
 use neurarm::export::export_fmu;
+use neurarm_cosim::System;
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
 use neurarm_physics::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
 use neurarm_physics::config::ArmConfig;
@@ -93,7 +93,7 @@ fn loop_step(c: &mut Criterion) {
     let mut spec = tracking_system(&fmus.arm, &fmus.task_controller, Some(&comp), &start, &settings);
     spec.simulation.record.clear();
     std::fs::write(dir.join("system.toml"), spec.to_toml().expect("toml")).expect("system written");
-    fmi2_cosim::ssp::write_ssp(&spec, &dir, &dir.join("system.ssp")).expect("SSP written");
+    neurarm_cosim::ssp::write_ssp(&spec, &dir, &dir.join("system.ssp")).expect("SSP written");
 
     let system = System::from_spec(&spec, &dir).expect("system");
     let mut sim = system.initialize(0.0, STEP, spec.simulation.algorithm, &[]).expect("initialised");
@@ -147,7 +147,7 @@ const BATCHES: u32 = 2000;
 /// then a batch of the other), the fastest batch of each kept: on a machine that others load,
 /// criterion's runs one after the other can see different loads, while the fastest of many
 /// alternating batches sees each loop at its least disturbed.
-fn alternating_batches(sim: &mut fmi2_cosim::Simulation, plain: &mut PlainLoop) -> (f64, f64) {
+fn alternating_batches(sim: &mut neurarm_cosim::Simulation, plain: &mut PlainLoop) -> (f64, f64) {
     let (mut master_best, mut plain_best) = (f64::INFINITY, f64::INFINITY);
     for _ in 0..BATCHES {
         let start = std::time::Instant::now();
@@ -171,7 +171,7 @@ const PROFILE_STEPS: &str = "NEURARM_LOOP_PROFILE_STEPS";
 
 /// One step of the timed master (nothing recorded); a call of its own, for the profiler.
 #[inline(never)]
-fn master_step(sim: &mut fmi2_cosim::Simulation) {
+fn master_step(sim: &mut neurarm_cosim::Simulation) {
     sim.step().expect("step");
 }
 

@@ -1,4 +1,4 @@
-//! A closed loop of FMUs through the co-simulation master (`fmi2-cosim`): the default arm with
+//! A closed loop of FMUs through the co-simulation master (`neurarm-cosim`): the default arm with
 //! its base turned 90° (gravity in the plane), held at a target pose by the joint controller
 //! (P(D) control) with the ideal gravity compensator feeding its `tau_comp` inputs. The three
 //! FMUs are exported here from neurarm's models; the loop is also written as an SSP archive.
@@ -8,8 +8,8 @@
 use std::f64::consts::FRAC_PI_2;
 use std::path::PathBuf;
 
-use fmi2_cosim::{Algorithm, System, Value};
 use neurarm::export::export_fmu;
+use neurarm_cosim::{Algorithm, System, Value};
 use neurarm_models::{FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, PlanarArmSpec};
 use neurarm_physics::config::ArmConfig;
 
@@ -44,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let record: Vec<String> = (1..=4).map(|i| format!("arm.q_{i}")).collect();
     let mut sim = system.clone().initialize(0.0, 1e-3, Algorithm::GaussSeidel, &record)?;
     let end = sim.run_until(5.0)?;
-    if end != fmi2_cosim::RunEnd::Completed {
+    if end != neurarm_cosim::RunEnd::Completed {
         return Err(format!("the run ended early: {end:?}").into());
     }
     println!("stepping order: {}", sim.step_order().join(" → "));
@@ -55,17 +55,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(e) = errors.iter().find(|e| e.abs() > 0.05) {
         return Err(format!("the loop did not settle: an error of {e} rad").into());
     }
-    let simulation = fmi2_cosim::SimulationSpec {
+    let simulation = neurarm_cosim::SimulationSpec {
         start: 0.0,
         stop: 5.0,
         step: 1e-3,
         algorithm: Algorithm::GaussSeidel,
         record,
         record_every: 1,
-        on_discard: fmi2_cosim::OnDiscard::Stop,
+        on_discard: neurarm_cosim::OnDiscard::Stop,
     };
     let ssp = dir.join("hold.ssp");
-    fmi2_cosim::ssp::write_system(&system, &simulation, &ssp)?;
+    neurarm_cosim::ssp::write_system(&system, &simulation, &ssp)?;
     println!("the loop as an SSP archive: {} (in a temporary folder unless you name one)", ssp.display());
     Ok(())
 }

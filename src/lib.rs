@@ -5,7 +5,7 @@
 //! plots ([`report`]), CSV tables ([`table`]), where outputs go ([`output`]), open-loop
 //! simulation ([`simulate`]) and FMU export ([`export`]), over the workspace's crates: `neurarm-physics` (arm, networks,
 //! control), `neurarm-models` (the models behind the FMUs), `fmi2-export` (the FMI 2.0
-//! export layer) and `fmi2-cosim` (the co-simulation master).
+//! export layer) and `neurarm-cosim` (the co-simulation master).
 
 pub mod experiments;
 pub mod export;

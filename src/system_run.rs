@@ -6,7 +6,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
-use fmi2_cosim::{BaseType, OnDiscard, RunEnd, RunOutcome, SystemSpec};
+use neurarm_cosim::{BaseType, OnDiscard, RunEnd, RunOutcome, SystemSpec};
 
 /// How a run of a system file ended, for the CLI to report.
 #[derive(Debug)]
@@ -66,7 +66,7 @@ pub fn run_system_file(system: &Path, output: &Path, on_discard: Option<OnDiscar
     }
     let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let flag = interrupt_flag().map_err(anyhow::Error::msg)?;
-    let outcome = fmi2_cosim::run(&spec, base, Some(flag)).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
+    let outcome = neurarm_cosim::run(&spec, base, Some(flag)).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
     write_recording(output, &outcome).with_context(|| format!("writing {}", crate::output::describe(output)))?;
     let end = match (&outcome.end, &outcome.error) {
         (_, Some(e)) => SystemRunEnd::Failed(e.to_string()),

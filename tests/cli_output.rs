@@ -323,8 +323,8 @@ fn the_masters_recordings_are_written_in_the_shortest_round_trip_form() {
     let out = d.join("run.csv");
     let o = neurarm().args(["simulate"]).arg(&system_path).arg("-o").arg(&out).output().unwrap();
     assert!(o.status.success(), "{}", stderr_of(&o));
-    let spec = fmi2_cosim::SystemSpec::from_toml(system, "system.toml").unwrap();
-    let outcome = fmi2_cosim::run(&spec, d, None).unwrap();
+    let spec = neurarm_cosim::SystemSpec::from_toml(system, "system.toml").unwrap();
+    let outcome = neurarm_cosim::run(&spec, d, None).unwrap();
     assert!(outcome.error.is_none());
     let text = std::fs::read_to_string(&out).unwrap();
     assert_cells_are(&text, &outcome.rows);

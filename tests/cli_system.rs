@@ -1,5 +1,5 @@
 //! `neurarm simulate system.toml` with FMUs that are not neurarm's (the test FMUs of
-//! `fmi2-test-fmus`): a unit that ends the run by discarding a step, strings and
+//! `neurarm-test-fmus`): a unit that ends the run by discarding a step, strings and
 //! enumerations in the CSV, a stop time that is not a whole number of steps, and Ctrl-C.
 //! Needs the built binaries (scripts/test builds the workspace first).
 
@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Stdio;
 
 use assert_cmd::Command;
-use fmi2_test_fmus::{fmu_in, TestModel};
+use neurarm_test_fmus::{fmu_in, TestModel};
 
 fn neurarm() -> Command {
     Command::cargo_bin("neurarm").expect("the neurarm binary is built")
@@ -166,7 +166,7 @@ fn fmi3_units_write_the_same_csv_as_their_fmi2_twins() {
     for (model, simulation) in systems {
         let m = TestModel::named(model).unwrap();
         fmu_in(dir.path(), m).unwrap();
-        fmi2_test_fmus::fmu3_in(dir.path(), m).unwrap();
+        neurarm_test_fmus::fmu3_in(dir.path(), m).unwrap();
         let mut csv = Vec::new();
         for (va, vb) in [("fmu", "fmu"), ("fmi3.fmu", "fmi3.fmu"), ("fmi3.fmu", "fmu")] {
             let mut text = format!("[[fmu]]\nname = \"a\"\npath = \"{model}.{va}\"\n\n");

@@ -2,8 +2,8 @@
 //! period of tracking): it runs, writes its outputs, and its quality figures hold.
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
-use fmi2_cosim::SystemSpec;
 use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
+use neurarm_cosim::SystemSpec;
 use std::path::Path;
 
 use neurarm_physics::config::ArmConfig;
@@ -54,7 +54,7 @@ fn the_quick_paper_run_reproduces_the_papers_findings() {
         assert_eq!(SystemSpec::from_toml(&spec.to_toml().unwrap(), name).unwrap(), spec);
     }
     let spec = SystemSpec::from_toml(&std::fs::read_to_string(out.path().join("systems/joint_nn.toml")).unwrap(), "joint_nn").unwrap();
-    let rerun = fmi2_cosim::run(&spec, &out.path().join("systems"), None).unwrap();
+    let rerun = neurarm_cosim::run(&spec, &out.path().join("systems"), None).unwrap();
     assert!(rerun.error.is_none());
     let recorded = std::fs::read_to_string(out.path().join("data/joint_nn.csv")).unwrap();
     let first_after_start: Vec<f64> = recorded.lines().nth(2).unwrap().split(',').map(|x| x.parse().unwrap()).collect();
@@ -108,9 +108,9 @@ fn check_adaptation(out: &Path, json: &serde_json::Value) {
     let systems = out.join("systems");
     let read = |name: &str| SystemSpec::from_toml(&std::fs::read_to_string(systems.join(format!("{name}.toml"))).unwrap(), name).unwrap();
     let mut off = read("drift_adaptive");
-    off.fmu.iter_mut().find(|f| f.name == "comp").unwrap().parameters.insert("adapt".into(), fmi2_cosim::Value::Boolean(false));
-    let (off, on) = (fmi2_cosim::run(&off, &systems, None).unwrap(), fmi2_cosim::run(&read("drift_static"), &systems, None).unwrap());
-    let column = |run: &fmi2_cosim::RunOutcome, name: &str| -> Vec<u64> {
+    off.fmu.iter_mut().find(|f| f.name == "comp").unwrap().parameters.insert("adapt".into(), neurarm_cosim::Value::Boolean(false));
+    let (off, on) = (neurarm_cosim::run(&off, &systems, None).unwrap(), neurarm_cosim::run(&read("drift_static"), &systems, None).unwrap());
+    let column = |run: &neurarm_cosim::RunOutcome, name: &str| -> Vec<u64> {
         let k = run.columns.iter().position(|c| c == name).unwrap();
         run.rows.iter().map(|r| r[k].to_bits()).collect()
     };

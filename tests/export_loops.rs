@@ -7,7 +7,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
-use fmi2_cosim::{Algorithm, System, Value};
+use neurarm_cosim::{Algorithm, System, Value};
 use neurarm_physics::arm::{end_effector_position, JointFriction, LinkParams};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{scaled_reference, ReferencePlacement};
@@ -98,7 +98,7 @@ fn tracking_rows(dir: &Path, config: &ArmConfig, compensated: bool, fmi3: [bool;
     }
     let record: Vec<String> = (1..=n).map(|i| format!("arm.q_{i}")).collect();
     let mut sim = s.initialize(0.0, 1e-3, Algorithm::GaussSeidel, &record).unwrap();
-    assert_eq!(sim.run_until(2.0).unwrap(), fmi2_cosim::RunEnd::Completed);
+    assert_eq!(sim.run_until(2.0).unwrap(), neurarm_cosim::RunEnd::Completed);
     sim.take_rows()
 }
 

@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use fmi2_cosim::{run, Algorithm, System, SystemSpec, Value};
 use neurarm::export::export_fmu;
+use neurarm_cosim::{run, Algorithm, System, SystemSpec, Value};
 use neurarm_models::{FmuSpec, GainSpec, IntegratorSpec, ModelSpec};
 
 fn fmu(dir: &Path, identifier: &str, model: ModelSpec) -> PathBuf {
@@ -38,7 +38,7 @@ fn integrator_gain_loop_is_the_discrete_exponential() {
         s.set("int", "y0", Value::Real(y0)).unwrap().set("gain", "k", Value::Real(-a)).unwrap();
         s.connect("int.y", "gain.u").unwrap().connect("gain.y", "int.u").unwrap();
         let mut sim = s.initialize(0.0, h, algorithm, &["int.y".into(), "gain.y".into()]).unwrap();
-        assert_eq!(sim.run_until(2.0).unwrap(), fmi2_cosim::RunEnd::Completed);
+        assert_eq!(sim.run_until(2.0).unwrap(), neurarm_cosim::RunEnd::Completed);
         assert_eq!(sim.rows().len(), 201);
         for (n, row) in sim.rows().iter().enumerate() {
             let expected = y0 * (1.0 - a * h).powi(n as i32);
@@ -67,7 +67,7 @@ fn gauss_seidel_and_jacobi_differ_as_theory_says() {
         s.connect("int1.y", "int2.u").unwrap().connect("int2.y", "gain.u").unwrap().connect("gain.y", "int1.u").unwrap();
         let mut sim = s.initialize(0.0, h, algorithm, &["int1.y".into(), "int2.y".into()]).unwrap();
         assert_eq!(sim.step_order(), ["int1", "int2", "gain"]);
-        assert_eq!(sim.run_until(10.0).unwrap(), fmi2_cosim::RunEnd::Completed);
+        assert_eq!(sim.run_until(10.0).unwrap(), neurarm_cosim::RunEnd::Completed);
         results.push(sim.take_rows());
     }
     let (gs, jacobi) = (&results[0], &results[1]);
@@ -233,7 +233,7 @@ fn events_on_what_cannot_change_while_running_are_refused_before_the_run() {
     let mut s = System::new();
     s.add_fmu("gain", &b.gain).unwrap().add_fmu("int", &b.integrator).unwrap();
     s.connect("gain.y", "int.u").unwrap();
-    let event = |time: f64, until: Option<f64>, name: &str, value: Value| fmi2_cosim::EventSpec {
+    let event = |time: f64, until: Option<f64>, name: &str, value: Value| neurarm_cosim::EventSpec {
         time,
         until,
         set: [(name.to_owned(), value)].into(),

@@ -5,9 +5,9 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use fmi2_cosim::ssp::write_ssp;
-use fmi2_cosim::{ConnectionSpec, FmuEntry, SimulationSpec, SystemSpec, Value};
 use neurarm::export::export_fmu;
+use neurarm_cosim::ssp::write_ssp;
+use neurarm_cosim::{ConnectionSpec, FmuEntry, SimulationSpec, SystemSpec, Value};
 use neurarm_models::{FmuSpec, GainSpec, IntegratorSpec, ModelSpec};
 
 fn fmu(dir: &Path, identifier: &str, model: ModelSpec) -> PathBuf {
@@ -40,7 +40,7 @@ fn loop_spec(integrator: &str) -> SystemSpec {
             algorithm: Default::default(),
             record: vec!["int.y".into(), "gain.y".into()],
             record_every: 1,
-            on_discard: fmi2_cosim::OnDiscard::Stop,
+            on_discard: neurarm_cosim::OnDiscard::Stop,
         },
         event: Vec::new(),
     }
@@ -219,7 +219,7 @@ fn events_go_into_our_annotation() {
     fmu(dir.path(), "Integrator", ModelSpec::Integrator(IntegratorSpec { y0: 0.0 }));
     fmu(dir.path(), "Gain", ModelSpec::Gain(GainSpec { k: 1.0 }));
     let mut spec = loop_spec("Integrator.fmu");
-    spec.event.push(fmi2_cosim::EventSpec { time: 0.5, until: Some(1.5), set: [("gain.k".to_owned(), Value::Real(0.25))].into() });
+    spec.event.push(neurarm_cosim::EventSpec { time: 0.5, until: Some(1.5), set: [("gain.k".to_owned(), Value::Real(0.25))].into() });
     let out = dir.path().join("events.ssp");
     write_ssp(&spec, dir.path(), &out).unwrap();
     let mut archive = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();

@@ -3,7 +3,7 @@
 
 #![no_main]
 
-use fmi2_cosim::SystemSpec;
+use neurarm_cosim::SystemSpec;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -49,7 +49,7 @@ pub struct SimulateArgs {
     /// the run there with a notice, exit 0) or `error` (fail); overrides the file's
     /// `[simulation] on_discard` (default stop).
     #[arg(long, value_parser = parse_on_discard, requires = "system")]
-    on_discard: Option<fmi2_cosim::OnDiscard>,
+    on_discard: Option<neurarm_cosim::OnDiscard>,
 }
 
 /// Runs `neurarm simulate`.
@@ -108,10 +108,10 @@ pub fn run(args: SimulateArgs) -> Result<()> {
 }
 
 /// Parses a discard policy for clap.
-fn parse_on_discard(text: &str) -> std::result::Result<fmi2_cosim::OnDiscard, String> {
+fn parse_on_discard(text: &str) -> std::result::Result<neurarm_cosim::OnDiscard, String> {
     match text {
-        "stop" => Ok(fmi2_cosim::OnDiscard::Stop),
-        "error" => Ok(fmi2_cosim::OnDiscard::Error),
+        "stop" => Ok(neurarm_cosim::OnDiscard::Stop),
+        "error" => Ok(neurarm_cosim::OnDiscard::Error),
         _ => Err(format!("'{text}': use stop or error")),
     }
 }

@@ -16,7 +16,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use fmi2_cosim::{ConnectionSpec, EventSpec, SystemSpec, Value};
+use neurarm_cosim::{ConnectionSpec, EventSpec, SystemSpec, Value};
 use neurarm_models::AdaptationLaw;
 use serde::Serialize;
 

@@ -8,7 +8,7 @@ use nalgebra::DMatrix;
 use super::{identification_internal_step, joint_loop, lightest_inertias, master, Settings};
 pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
-use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{coriolis_of_one_joint_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
 use neurarm_physics::nn::encoding::LOG_SPEED_SCALE_RAD_S;
 use neurarm_physics::nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};

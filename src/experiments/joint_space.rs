@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::Path;
 
-use fmi2_cosim::{SystemSpec, Value};
+use neurarm_cosim::{SystemSpec, Value};
 
 use super::{closed_loop, LoopRun, Settings};
 

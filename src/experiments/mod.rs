@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use crate::export::export_fmu_for;
-use fmi2_cosim::{Algorithm, ConnectionSpec, FmuEntry, MasterError, SimulationSpec, System, SystemSpec, Value};
+use neurarm_cosim::{Algorithm, ConnectionSpec, FmuEntry, MasterError, SimulationSpec, System, SystemSpec, Value};
 use neurarm_models::{
     FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
 };
@@ -384,7 +384,7 @@ pub(crate) fn closed_loop(
             algorithm: Algorithm::GaussSeidel,
             record: Vec::new(),
             record_every: 1,
-            on_discard: fmi2_cosim::OnDiscard::Stop,
+            on_discard: neurarm_cosim::OnDiscard::Stop,
         },
         event: Vec::new(),
     }
@@ -399,7 +399,7 @@ pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
     let mut run = s.initialize(sim.start, sim.step, sim.algorithm, &sim.record).map_err(master)?;
     run.record_every(sim.record_every);
     // The paper's loops never expect a unit to stop early: a discarded step is a failure.
-    run.on_discard(fmi2_cosim::OnDiscard::Error);
+    run.on_discard(neurarm_cosim::OnDiscard::Error);
     run.schedule(&spec.event).map_err(master)?;
     let outcome = run.run_until(sim.stop);
     let recorded = LoopRun { columns: run.columns(), rows: run.take_rows() };
@@ -409,7 +409,7 @@ pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
         ));
     }
     let end = outcome.map_err(|e| format!("{} (at t = {:.3} s)", master(e), recorded.rows.last().map_or(sim.start, |r| r[0])))?;
-    if end != fmi2_cosim::RunEnd::Completed {
+    if end != neurarm_cosim::RunEnd::Completed {
         return Err(format!("the loop ended early: {end:?}"));
     }
     Ok(recorded)

@@ -760,7 +760,7 @@ fn diagnostics(
     let set = |mut spec: SystemSpec, unit: &str, values: &[(String, f64)]| {
         if let Some(entry) = spec.fmu.iter_mut().find(|f| f.name == unit) {
             for (name, value) in values {
-                entry.parameters.insert(name.clone(), fmi2_cosim::Value::Real(*value));
+                entry.parameters.insert(name.clone(), neurarm_cosim::Value::Real(*value));
             }
         }
         spec
@@ -930,7 +930,7 @@ fn write_loop_files(name: &str, purpose: &str, spec: &SystemSpec, systems_dir: &
         spec.to_toml()?
     );
     write_text_atomic(&toml, &text).map_err(writing(&toml))?;
-    fmi2_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())
+    neurarm_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use fmi2_cosim::{SystemSpec, Value};
+use neurarm_cosim::{SystemSpec, Value};
 use neurarm_physics::arm::{jacobian, ArmParams, ArmState};
 use neurarm_physics::control::{inverse_kinematics, pseudo_inverse, scaled_reference, ReferencePlacement};
 

@@ -19,9 +19,9 @@ TARGET = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
 
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
-    tool = TARGET / "release" / "fmi2-test-fmus"
+    tool = TARGET / "release" / "neurarm-test-fmus"
     if not tool.exists():
-        subprocess.run(["cargo", "build", "--release", "--locked", "-p", "fmi2-test-fmus"], cwd=ROOT, check=True)
+        subprocess.run(["cargo", "build", "--release", "--locked", "-p", "neurarm-test-fmus"], cwd=ROOT, check=True)
     out = tmp_path_factory.mktemp("test-fmus")
     subprocess.run([tool, out], check=True, capture_output=True)
     return out

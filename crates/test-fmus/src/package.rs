@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use crate::{TestModel, MODEL_FILE};
 
 /// The library's file name as cargo builds it.
-pub const LIBRARY: &str = "libfmi2_test_fmus.so";
+pub const LIBRARY: &str = "libneurarm_test_fmus.so";
 
 /// The built library: `$FMI2_TEST_FMUS_BINARY`, else beside the running program (or one
 /// folder up, for test programs in `target/<profile>/deps`), else the newest in the
@@ -28,7 +28,7 @@ pub fn built_library() -> Result<PathBuf, String> {
         .map(|profile| target.join(profile).join(LIBRARY))
         .filter_map(|p| Some((std::fs::metadata(&p).ok()?.modified().ok()?, p)))
         .max();
-    newest.map(|(_, p)| p).ok_or_else(|| format!("{LIBRARY} is not built: run `cargo build -p fmi2-test-fmus` (scripts/test does)"))
+    newest.map(|(_, p)| p).ok_or_else(|| format!("{LIBRARY} is not built: run `cargo build -p neurarm-test-fmus` (scripts/test does)"))
 }
 
 /// `<Identifier>.fmu` of `model` in `dir`, packaged from the built library.

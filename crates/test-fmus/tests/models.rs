@@ -2,7 +2,7 @@
 //! and refusals a master relies on.
 
 use fmi2_export::instance::{Instance, Status};
-use fmi2_test_fmus::TestModel;
+use neurarm_test_fmus::TestModel;
 
 fn instance(model: TestModel) -> Instance {
     let built = model.build().unwrap();

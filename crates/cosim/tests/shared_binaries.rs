@@ -1,9 +1,9 @@
 //! FMUs with the same binary share one loaded copy. Alone in its test program, so that no
 //! other test's FMUs are mapped into the process while it counts.
-//! Needs the test FMUs' library: `cargo build --release -p fmi2-test-fmus` (scripts/test does).
+//! Needs the test FMUs' library: `cargo build --release -p neurarm-test-fmus` (scripts/test does).
 
-use fmi2_cosim::{Algorithm, RunEnd, System, Value};
-use fmi2_test_fmus::{fmu_in, TestModel};
+use neurarm_cosim::{Algorithm, RunEnd, System, Value};
+use neurarm_test_fmus::{fmu_in, TestModel};
 
 /// FMUs with the same binary share one loaded copy (the test FMUs are one library renamed):
 /// the process maps one file of the units' unpacked archives, not three.
@@ -24,7 +24,7 @@ fn identical_binaries_are_loaded_once() {
     let mut mapped: Vec<&str> = maps
         .lines()
         .filter_map(|l| l.split_whitespace().nth(5))
-        .filter(|p| p.contains("/fmi2-cosim-") && p.contains("/binaries/"))
+        .filter(|p| p.contains("/neurarm-cosim-") && p.contains("/binaries/"))
         .collect();
     mapped.sort_unstable();
     mapped.dedup();

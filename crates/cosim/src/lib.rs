@@ -25,7 +25,7 @@
 //! passes values at communication points only, so it is that to first order in the step.
 //!
 //! ```
-//! use fmi2_cosim::{Algorithm, SimulationSpec, System, Value};
+//! use neurarm_cosim::{Algorithm, SimulationSpec, System, Value};
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! # let dir = tempfile::tempdir()?;
@@ -46,15 +46,15 @@
 //! // The same system, simulated...
 //! let record = vec!["a.x".to_owned(), "b.x".to_owned()];
 //! let mut sim = system.clone().initialize(0.0, 1e-3, Algorithm::GaussSeidel, &record)?;
-//! assert_eq!(sim.run_until(10.0)?, fmi2_cosim::RunEnd::Completed);
+//! assert_eq!(sim.run_until(10.0)?, neurarm_cosim::RunEnd::Completed);
 //! let last = sim.rows().last().unwrap();
 //! let exact = (1.0 + (2f64.sqrt() * 10.0).cos()) / 2.0;
 //! assert!((last[1] - exact).abs() < 5e-3, "x_a(10) = {} vs {exact}", last[1]);
 //! assert!((last[1] + last[2] - 1.0).abs() < 5e-3, "x_a + x_b stays 1");
 //!
 //! // ...and written as an SSP 1.0 archive for other engines.
-//! let simulation = SimulationSpec { start: 0.0, stop: 10.0, step: 1e-3, algorithm: Algorithm::GaussSeidel, record, record_every: 1, on_discard: fmi2_cosim::OnDiscard::Stop };
-//! fmi2_cosim::ssp::write_system(&system, &simulation, &dir.path().join("pair.ssp"))?;
+//! let simulation = SimulationSpec { start: 0.0, stop: 10.0, step: 1e-3, algorithm: Algorithm::GaussSeidel, record, record_every: 1, on_discard: neurarm_cosim::OnDiscard::Stop };
+//! neurarm_cosim::ssp::write_system(&system, &simulation, &dir.path().join("pair.ssp"))?;
 //! # Ok(())
 //! # }
 //! ```

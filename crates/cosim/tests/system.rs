@@ -5,7 +5,7 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use fmi2_cosim::{Algorithm, SimulationSpec, System, Value};
+use neurarm_cosim::{Algorithm, SimulationSpec, System, Value};
 
 /// A copy of the FMU at `fmu` with nothing but its `modelDescription.xml`.
 fn description_only(fmu: &Path, out: &Path) -> PathBuf {
@@ -27,7 +27,7 @@ fn simulation(record: &[&str]) -> SimulationSpec {
         algorithm: Algorithm::Jacobi,
         record: record.iter().map(|s| s.to_string()).collect(),
         record_every: 1,
-        on_discard: fmi2_cosim::OnDiscard::Stop,
+        on_discard: neurarm_cosim::OnDiscard::Stop,
     }
 }
 
@@ -52,7 +52,7 @@ fn a_system_is_checked_and_written_before_anything_is_loaded() {
 
     // Written as SSP from the interfaces alone: both FMUs go in, connectors as connected.
     let out = dir.path().join("pair.ssp");
-    fmi2_cosim::ssp::write_system(&system, &simulation(&["a.x", "b.x"]), &out).unwrap();
+    neurarm_cosim::ssp::write_system(&system, &simulation(&["a.x", "b.x"]), &out).unwrap();
     let mut ssp = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
     let mut ssd = String::new();
     ssp.by_name("SystemStructure.ssd").unwrap().read_to_string(&mut ssd).unwrap();
@@ -67,7 +67,7 @@ fn a_system_is_checked_and_written_before_anything_is_loaded() {
     assert_eq!(names, ["SystemStructure.ssd", "resources/Hollow.fmu", "resources/VanDerPol.fmu"]);
 
     // A recorded variable that does not exist is refused by the writer as by the simulation.
-    let e = fmi2_cosim::ssp::write_system(&system, &simulation(&["b.y"]), &out).unwrap_err();
+    let e = neurarm_cosim::ssp::write_system(&system, &simulation(&["b.y"]), &out).unwrap_err();
     assert_eq!((e.unit.as_deref(), e.variable.as_deref()), (Some("b"), Some("y")));
 
     // Only initialize loads the binaries, and the one without a binary fails by name.
@@ -83,7 +83,7 @@ fn the_same_checked_system_runs() {
     system.add_fmu("osc", &fmu).unwrap();
     system.set("osc", "mu", Value::Real(0.0)).unwrap().set("osc", "x0", Value::Real(1.0)).unwrap();
     let mut sim = system.initialize(0.0, 0.01, Algorithm::GaussSeidel, &["osc.x".into(), "osc.v".into()]).unwrap();
-    assert_eq!(sim.run_until(3.0).unwrap(), fmi2_cosim::RunEnd::Completed);
+    assert_eq!(sim.run_until(3.0).unwrap(), neurarm_cosim::RunEnd::Completed);
     // Alone and unforced, with mu = 0: x = cos t, v = −sin t, integrated by the FMU's RK4.
     for row in sim.rows() {
         assert!((row[1] - row[0].cos()).abs() < 1e-9 && (row[2] + row[0].sin()).abs() < 1e-9, "{row:?}");

@@ -2,13 +2,13 @@
 //! the units' FMI versions and the types their connections carry (Real, Boolean, enumeration),
 //! with nothing recorded. The FMUs allocate through their own libraries' allocators; the
 //! counting allocator here sees the master's allocations only.
-//! Needs the test FMUs' library: `cargo build --release -p fmi2-test-fmus` (scripts/test does).
+//! Needs the test FMUs' library: `cargo build --release -p neurarm-test-fmus` (scripts/test does).
 
 use std::alloc::{GlobalAlloc, Layout, System as SystemAllocator};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use fmi2_cosim::{Algorithm, FmiVersion, System};
-use fmi2_test_fmus::{fmu3_in, fmu_in, TestModel};
+use neurarm_cosim::{Algorithm, FmiVersion, System};
+use neurarm_test_fmus::{fmu3_in, fmu_in, TestModel};
 
 struct Counting;
 

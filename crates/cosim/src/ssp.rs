@@ -60,7 +60,8 @@ const NS_OSP: &str = "http://opensimulationplatform.com/SSP/OSPAnnotations";
 /// algorithm and communication step from.
 pub const OSP_ANNOTATION_TYPE: &str = "com.opensimulationplatform";
 
-/// Namespace of the elements inside the simulation annotation.
+/// Namespace of the elements inside the simulation annotation (named after the crate's first
+/// name, which SSP files already written carry).
 pub const ANNOTATION_NAMESPACE: &str = "urn:fmi2-cosim:ssp:simulation";
 
 /// `type` of the `ssc:Annotation` in `ssd:DefaultExperiment` that holds the communication
@@ -182,7 +183,7 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, events: &[EventSpec], s
     let empty = |w: &mut Writer<Cursor<Vec<u8>>>, e: BytesStart| w.write_event(Event::Empty(e)).expect(ok);
 
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).expect(ok);
-    let tool = concat!("fmi2-cosim ", env!("CARGO_PKG_VERSION"));
+    let tool = concat!("neurarm-cosim ", env!("CARGO_PKG_VERSION"));
     start(
         &mut w,
         BytesStart::new("ssd:SystemStructureDescription").with_attributes([
@@ -372,7 +373,7 @@ fn write_archive(out: &Path, ssd: &str, resources: &[(PathBuf, String)]) -> Resu
     // Readable by all (0644 less the umask), as a plain file would be, not a temporary 0600.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
-    let tmp = builder.prefix(".fmi2-cosim-").suffix(".ssp.tmp").tempfile_in(dir).map_err(|e| fail(&e))?;
+    let tmp = builder.prefix(".neurarm-cosim-").suffix(".ssp.tmp").tempfile_in(dir).map_err(|e| fail(&e))?;
     let mut zip = zip::ZipWriter::new(tmp.reopen().map_err(|e| fail(&e))?);
     let deflated = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     // An FMU is a zip already: stored as it is.

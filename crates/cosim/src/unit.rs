@@ -438,7 +438,7 @@ fn unpack(path: &Path) -> Result<tempfile::TempDir, String> {
     if total > MAX_UNPACKED_BYTES {
         return Err(format!("it would unpack to {total} bytes, more than the {} GiB allowed", MAX_UNPACKED_BYTES >> 30));
     }
-    let dir = tempfile::Builder::new().prefix("fmi2-cosim-").tempdir().map_err(|e| format!("temporary folder: {e}"))?;
+    let dir = tempfile::Builder::new().prefix("neurarm-cosim-").tempdir().map_err(|e| format!("temporary folder: {e}"))?;
     archive.extract(dir.path()).map_err(|e| format!("unpacking: {e}"))?;
     Ok(dir)
 }

@@ -1,16 +1,16 @@
 //! What FMI 2.0 allows and a general master must handle, each with a small FMU of
-//! `fmi2-test-fmus` (on the export layer, nothing of neurarm's robotics): a unit that discards
+//! `neurarm-test-fmus` (on the export layer, nothing of neurarm's robotics): a unit that discards
 //! a step, outputs that depend on separate inputs, a stop time that is not a whole number of
 //! steps, a unit that cannot vary its step, outputs with settable start values,
 //! enumerations and strings, and an interrupted run.
-//! Needs the test FMUs' library: `cargo build --release -p fmi2-test-fmus` (scripts/test does).
+//! Needs the test FMUs' library: `cargo build --release -p neurarm-test-fmus` (scripts/test does).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use fmi2_cosim::{run, Algorithm, BaseType, FmuEntry, OnDiscard, RunEnd, SimulationSpec, System, SystemSpec, Value};
-use fmi2_test_fmus::{fmu_in, TestModel};
+use neurarm_cosim::{run, Algorithm, BaseType, FmuEntry, OnDiscard, RunEnd, SimulationSpec, System, SystemSpec, Value};
+use neurarm_test_fmus::{fmu_in, TestModel};
 
 fn fmu(dir: &Path, model: TestModel) -> PathBuf {
     fmu_in(dir, model).expect("test FMU packaged")
@@ -21,7 +21,7 @@ fn names(list: &[&str]) -> Vec<String> {
 }
 
 /// The column `name` of a simulation's rows.
-fn column(sim: &fmi2_cosim::Simulation, name: &str) -> Vec<f64> {
+fn column(sim: &neurarm_cosim::Simulation, name: &str) -> Vec<f64> {
     let c = sim.columns().iter().position(|c| c == name).expect("recorded");
     sim.rows().iter().map(|r| r[c]).collect()
 }
@@ -335,7 +335,7 @@ fn enumerations_are_written_to_ssp_with_their_types() {
         on_discard: OnDiscard::Stop,
     };
     let out = dir.path().join("modes.ssp");
-    fmi2_cosim::ssp::write_system(&s, &simulation, &out).unwrap();
+    neurarm_cosim::ssp::write_system(&s, &simulation, &out).unwrap();
     let mut ssd = String::new();
     zip::ZipArchive::new(std::fs::File::open(&out).unwrap())
         .unwrap()

@@ -1,13 +1,13 @@
 //! FMI 3.0 Co-Simulation units in the master, alone and mixed with FMI 2.0 ones in one system:
-//! each test FMU of `fmi2-test-fmus` also comes as its FMI 3.0 twin (the same model behind the
+//! each test FMU of `neurarm-test-fmus` also comes as its FMI 3.0 twin (the same model behind the
 //! `fmi3*` API, value references unique over all types, enumerations read as Int64), and a
 //! system gives the same rows whichever version each unit is.
-//! Needs the test FMUs' library: `cargo build --release -p fmi2-test-fmus` (scripts/test does).
+//! Needs the test FMUs' library: `cargo build --release -p neurarm-test-fmus` (scripts/test does).
 
 use std::path::{Path, PathBuf};
 
-use fmi2_cosim::{Algorithm, BaseType, FmiVersion, RunEnd, System, Value};
-use fmi2_test_fmus::{fmu3_in, fmu_in, TestModel};
+use neurarm_cosim::{Algorithm, BaseType, FmiVersion, RunEnd, System, Value};
+use neurarm_test_fmus::{fmu3_in, fmu_in, TestModel};
 
 /// The FMU of `model` in version `version`.
 fn fmu(dir: &Path, model: TestModel, version: FmiVersion) -> PathBuf {
@@ -28,8 +28,8 @@ const BOTH: [FmiVersion; 2] = [FmiVersion::V2, FmiVersion::V3];
 fn the_twins_are_read_as_fmi3_with_unique_value_references() {
     let dir = tempfile::tempdir().unwrap();
     for model in TestModel::ALL {
-        let two = fmi2_cosim::Interface::read(&fmu(dir.path(), model, FmiVersion::V2)).unwrap();
-        let three = fmi2_cosim::Interface::read(&fmu(dir.path(), model, FmiVersion::V3)).unwrap();
+        let two = neurarm_cosim::Interface::read(&fmu(dir.path(), model, FmiVersion::V2)).unwrap();
+        let three = neurarm_cosim::Interface::read(&fmu(dir.path(), model, FmiVersion::V3)).unwrap();
         assert_eq!((two.fmi_version, three.fmi_version), (FmiVersion::V2, FmiVersion::V3));
         assert_eq!(two.guid, three.guid, "the instantiation token is the GUID");
         assert_eq!(two.variables.len(), three.variables.len());
@@ -205,17 +205,17 @@ fn a_mixed_system_is_written_to_ssp_with_ssp_types() {
     s.add_fmu("m1", &fmu(dir.path(), TestModel::Modes, FmiVersion::V3)).unwrap();
     s.add_fmu("split", &fmu(dir.path(), TestModel::Split, FmiVersion::V2)).unwrap();
     s.connect("m1.y", "split.u1").unwrap();
-    let simulation = fmi2_cosim::SimulationSpec {
+    let simulation = neurarm_cosim::SimulationSpec {
         start: 0.0,
         stop: 1.0,
         step: 0.5,
         algorithm: Algorithm::GaussSeidel,
         record: names(&["split.y1"]),
         record_every: 1,
-        on_discard: fmi2_cosim::OnDiscard::Stop,
+        on_discard: neurarm_cosim::OnDiscard::Stop,
     };
     let out = dir.path().join("mixed.ssp");
-    fmi2_cosim::ssp::write_system(&s, &simulation, &out).unwrap();
+    neurarm_cosim::ssp::write_system(&s, &simulation, &out).unwrap();
     let mut archive = zip::ZipArchive::new(std::fs::File::open(&out).unwrap()).unwrap();
     let mut ssd = String::new();
     std::io::Read::read_to_string(&mut archive.by_name("SystemStructure.ssd").unwrap(), &mut ssd).unwrap();

@@ -1,13 +1,13 @@
-//! Writes every test FMU into a folder: `fmi2-test-fmus DIR`.
+//! Writes every test FMU into a folder: `neurarm-test-fmus DIR`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use fmi2_test_fmus::{fmu_in, TestModel};
+use neurarm_test_fmus::{fmu_in, TestModel};
 
 fn main() -> ExitCode {
     let Some(dir) = std::env::args_os().nth(1).map(PathBuf::from) else {
-        eprintln!("usage: fmi2-test-fmus DIR   (writes Counter.fmu, Split.fmu, … into DIR)");
+        eprintln!("usage: neurarm-test-fmus DIR   (writes Counter.fmu, Split.fmu, … into DIR)");
         return ExitCode::FAILURE;
     };
     for model in TestModel::ALL {
