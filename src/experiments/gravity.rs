@@ -11,7 +11,7 @@ use rand::{Rng, SeedableRng};
 use super::friction::FrictionCurve;
 use super::{identification_internal_step, joint_loop, master, parallel, GravityDesign, Settings};
 use crate::identify::{gravity_pair, GravityCorrection, GravityOptions, PassFault, PassWindow};
-use fmi2_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{gravity_torques, inverse_dynamics_rnea_into, ArmData, ArmParams};
 use neurarm_physics::nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 
@@ -166,6 +166,10 @@ pub const STEADY_SHARE: f64 = 0.2;
 /// Repeats of an unsteady pass pair, each with passes twice as long as the last.
 pub const STEADY_RETRIES: u32 = 2;
 
+/// Bandwidth of the gravity sweep's hold [rad/s]: the inertia-scaled PD that keeps the joints
+/// on their moves is critically damped at it.
+pub const GRAVITY_HOLD_RAD_S: f64 = 80.0;
+
 /// Moves the arm (base turned 90°) through `points` in order: a smooth rest-to-rest move to
 /// just below each point, then every joint slowly up through it and back down at
 /// `SWEEP_SPEED`; at the middle of each pass the measured angles and commanded torques are
@@ -188,7 +192,7 @@ pub const STEADY_RETRIES: u32 = 2;
 /// Without `correction` both pair sets are the plain average.
 ///
 /// The joints are held on the moves by an inertia-scaled PD, τ = Ĥ(q)(q̈_d + K_d ė + K_p e) +
-/// Ĉ(q, q̇)q̇ with K_p = 1600 1/s², K_d = 80 1/s (critically damped at 40 rad/s in every pose),
+/// Ĉ(q, q̇)q̇ with K_p = ω², K_d = 2ω (critically damped at ω = [`GRAVITY_HOLD_RAD_S`] in every pose),
 /// computed here from the nominal rigid-body `model` *without gravity* (that is what is being
 /// identified) and passed to the joint controller's `tau_comp` input, its own gains at 0. A
 /// diagonal PD cannot do this: tuned for the lightest pose it is underdamped in the heavy ones
@@ -203,7 +207,7 @@ pub fn gravity_sweep(
     settings: &Settings,
 ) -> Result<GravitySweep, String> {
     const PASS_S: f64 = 0.4;
-    const HOLD_RAD_S: f64 = 80.0;
+    const HOLD_RAD_S: f64 = GRAVITY_HOLD_RAD_S;
     let n = model.dof();
     if let Some(curves) = correction.filter(|c| !c.is_empty() && c.len() != n) {
         return Err(format!("friction curves of {} joints for {n} joints", curves.len()));

@@ -122,7 +122,7 @@ pub fn report_markdown(run: &PaperRun) -> String {
     let _ = writeln!(
         s,
         "Gains: task space K_p = {} 1/s², K_d = {} 1/s, null-space damping {} 1/s (acceleration level: the same for any arm). \
-         Joint-space loop K_p = {} N·m/rad, K_d = {} N·m·s/rad per joint{}. The gravity sweep holds the joints by computed torque from the gravity-free rigid-body model at 40 rad/s.\n",
+         Joint-space loop K_p = {} N·m/rad, K_d = {} N·m·s/rad per joint{}. The gravity sweep holds the joints by computed torque from the gravity-free rigid-body model at {} rad/s.\n",
         settings.tracking_gains.kp,
         settings.tracking_gains.kd,
         settings.tracking_gains.null_damping,
@@ -136,7 +136,8 @@ pub fn report_markdown(run: &PaperRun) -> String {
             )
         } else {
             " (as given)".to_owned()
-        }
+        },
+        crate::experiments::gravity::GRAVITY_HOLD_RAD_S
     );
     let _ = writeln!(
         s,
