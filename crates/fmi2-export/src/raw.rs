@@ -3,9 +3,9 @@
 //! serialise), which are the same calls on an [`Instance`] in both versions. Messages name
 //! the function of the instance's API ([`Instance::api`]).
 
-use std::ffi::{c_char, c_void, CStr};
+use std::ffi::{c_char, c_int, c_void, CStr};
 
-use crate::instance::{Api, Function, Instance, StateHandle, Status};
+use crate::instance::{Api, Function, Instance, Phase, StateHandle, Status};
 
 /// An FMU state handle as both C APIs pass it (`fmi2FMUstate`, `fmi3FMUState`): a
 /// [`StateHandle`] of the instance, never an address (the instance keeps its states and frees
@@ -258,4 +258,37 @@ pub fn catch_panic<R>(body: impl FnOnce() -> R) -> Result<R, String> {
             at => format!("{message}, at {at}"),
         }
     })
+}
+
+/// What a C handle (`fmi2Component`, `fmi3Instance`) points to: a wrapper around an instance.
+pub trait HoldsInstance {
+    /// The instance inside.
+    fn instance(&mut self) -> &mut Instance;
+}
+
+/// The guard around every call of both C APIs that takes an instance: `Error` for NULL, `Fatal`
+/// once a panic was caught, a call trace when logging is on, and `body` run so that a panic
+/// becomes `Fatal` (logged, the instance then only freed) instead of unwinding into the host.
+///
+/// # Safety
+/// `c` is NULL or a handle the API's instantiate function returned for a `W`, not freed.
+pub unsafe fn guarded<W: HoldsInstance>(c: *mut c_void, name: &str, body: impl FnOnce(&mut W) -> Status) -> c_int {
+    if c.is_null() {
+        return Status::Error as c_int;
+    }
+    // SAFETY: a non-null handle is one the instantiate function returned (the caller's promise).
+    let wrapper = unsafe { &mut *(c as *mut W) };
+    if wrapper.instance().phase() == Phase::Fatal {
+        return Status::Fatal as c_int;
+    }
+    wrapper.instance().trace(|| name.to_string());
+    match catch_panic(|| body(&mut *wrapper)) {
+        Ok(s) => s as c_int,
+        Err(why) => {
+            let instance = wrapper.instance();
+            instance.error(&format!("{name}: internal error ({why}); the instance can only be freed"));
+            instance.set_fatal();
+            Status::Fatal as c_int
+        }
+    }
 }

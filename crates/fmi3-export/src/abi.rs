@@ -14,7 +14,7 @@
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::PathBuf;
 
-use fmi2_export::instance::{Api, Function, Instance, LogSink, Phase, Status};
+use fmi2_export::instance::{Api, Function, Instance, LogSink, Status};
 use fmi2_export::raw::{self, catch_panic, slice, slice_mut, str_arg};
 use fmi2_export::ModelFactory;
 
@@ -96,22 +96,13 @@ impl Wrapper {
 
 /// Runs `body` on the instance behind `c`, turning a panic into `fmi3Fatal`.
 unsafe fn with(c: Fmi3Instance, name: &str, body: impl FnOnce(&mut Wrapper) -> Status) -> RawStatus {
-    if c.is_null() {
-        return Status::Error as c_int;
-    }
-    // SAFETY: a non-null instance is one we returned from fmi3InstantiateCoSimulation.
-    let wrapper = unsafe { &mut *(c as *mut Wrapper) };
-    if wrapper.instance.phase() == Phase::Fatal {
-        return Status::Fatal as c_int;
-    }
-    wrapper.instance.trace(|| name.to_string());
-    match catch_panic(|| body(&mut *wrapper)) {
-        Ok(s) => s as c_int,
-        Err(why) => {
-            wrapper.instance.error(&format!("{name}: internal error ({why}); the instance can only be freed"));
-            wrapper.instance.set_fatal();
-            Status::Fatal as c_int
-        }
+    // SAFETY: a non-null `c` is a Wrapper this API's fmi3InstantiateCoSimulation returned (standard).
+    unsafe { raw::guarded(c, name, body) }
+}
+
+impl raw::HoldsInstance for Wrapper {
+    fn instance(&mut self) -> &mut Instance {
+        &mut self.instance
     }
 }
 
