@@ -43,15 +43,13 @@ pub fn library_extension(platform: &str) -> Option<&'static str> {
     PLATFORMS.iter().find(|(p, _)| *p == platform).map(|(_, e)| *e)
 }
 
-/// Checks that `bytes` is a shared library a host of platform folder `platform` can load: its
-/// file format (ELF, PE, Mach-O or a universal Mach-O), word size and architecture. The error
-/// says what the file is instead, so a binary in the wrong folder is caught when the FMU is
-/// written, not when a user's tool fails to load it.
-pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), String> {
+/// The file format and architecture of each library in `bytes`: one, or several for a
+/// universal Mach-O.
+fn slices(bytes: &[u8]) -> Result<Vec<(object::BinaryFormat, object::Architecture)>, String> {
     use object::read::macho::FatArch;
-    use object::{Architecture as A, BinaryFormat as F, Object};
+    use object::{BinaryFormat as F, Object};
     let kind = object::FileKind::parse(bytes).map_err(|e| format!("not a shared library ({e})"))?;
-    let slices: Vec<(F, A)> = match kind {
+    Ok(match kind {
         object::FileKind::MachOFat32 => {
             let fat = object::read::macho::MachOFatFile32::parse(bytes).map_err(|e| format!("a broken universal Mach-O ({e})"))?;
             fat.arches().iter().map(|a| (F::MachO, a.architecture())).collect()
@@ -64,7 +62,33 @@ pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), String> {
             let file = object::File::parse(bytes).map_err(|e| format!("not a shared library ({e})"))?;
             vec![(file.format(), file.architecture())]
         }
-    };
+    })
+}
+
+/// The architectures of a macOS library, thin or universal: `"x86_64"`, `"arm64"`.
+pub fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, String> {
+    use object::{Architecture as A, BinaryFormat as F};
+    let slices = slices(bytes)?;
+    if slices.iter().any(|(f, _)| *f != F::MachO) {
+        return Err("not a Mach-O library".into());
+    }
+    Ok(slices
+        .iter()
+        .filter_map(|(_, a)| match a {
+            A::X86_64 => Some("x86_64"),
+            A::Aarch64 => Some("arm64"),
+            _ => None,
+        })
+        .collect())
+}
+
+/// Checks that `bytes` is a shared library a host of platform folder `platform` can load: its
+/// file format (ELF, PE, Mach-O or a universal Mach-O), word size and architecture. The error
+/// says what the file is instead, so a binary in the wrong folder is caught when the FMU is
+/// written, not when a user's tool fails to load it.
+pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), String> {
+    use object::{Architecture as A, BinaryFormat as F};
+    let slices = slices(bytes)?;
     let accepted: &[(F, A)] = match platform {
         "linux64" => &[(F::Elf, A::X86_64), (F::Elf, A::Aarch64)],
         "linux32" => &[(F::Elf, A::I386), (F::Elf, A::Arm)],

@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-use fmi2_export::package::{documentation_page, read_binaries, write_archive};
+use fmi2_export::package::{documentation_page, macho_architectures, read_binaries, write_archive};
 use fmi2_export::ModelDescription;
 
 /// The FMI 3.0 platform folders (section 2.5.1.2) of a library built for the FMI 2.0 platform
@@ -34,33 +34,6 @@ pub fn platform_folders(platform: &str, bytes: &[u8]) -> Result<Vec<&'static str
         }
         other => return Err(format!("no FMI 3.0 platform folder known for {other:?}")),
     })
-}
-
-/// The architectures of a Mach-O library ("x86_64", "arm64"), thin or universal.
-fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, String> {
-    // Universal header (big endian): magic, count, then (cputype, subtype, offset, size, align).
-    let be = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_be_bytes([b[0], b[1], b[2], b[3]]));
-    let le = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
-    let name = |cpu: u32| match cpu {
-        0x0100_0007 => Some("x86_64"),
-        0x0100_000c => Some("arm64"),
-        _ => None,
-    };
-    let mut found = Vec::new();
-    match be(0) {
-        Some(0xcafe_babe) | Some(0xcafe_babf) => {
-            let wide = be(0) == Some(0xcafe_babf);
-            let count = be(4).ok_or("a truncated universal Mach-O")? as usize;
-            let stride = if wide { 32 } else { 20 };
-            for k in 0..count {
-                let cpu = be(8 + k * stride).ok_or("a truncated universal Mach-O")?;
-                found.extend(name(cpu));
-            }
-        }
-        _ if le(0) == Some(0xfeed_facf) => found.extend(le(4).and_then(name)),
-        _ => return Err("not a Mach-O library".into()),
-    }
-    Ok(found)
 }
 
 /// Writes the FMI 3.0 twin of a model to `path`: like
