@@ -264,13 +264,11 @@ pub fn compensator_from_logs(
     }
     let spec = FmuSpec {
         identifier: job.identifier.clone(),
-        model: ModelSpec::NnCompensator(NnCompensatorSpec {
-            joints: n,
-            friction: (1..=n).map(|i| format!("friction_{i}.json")).collect(),
-            gravity: gravity_pairs.map(|_| "gravity.json".to_owned()),
-            enable_friction: true,
-            enable_gravity: gravity_pairs.is_some(),
-        }),
+        model: ModelSpec::NnCompensator(NnCompensatorSpec::of_nets(
+            n,
+            (1..=n).map(|i| format!("friction_{i}.json")).collect(),
+            gravity_pairs.map(|_| "gravity.json".to_owned()),
+        )),
     };
     export_fmu_for(&spec, &sources, &job.output, job.platforms.as_deref())?;
     files.push(job.output.clone());

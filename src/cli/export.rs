@@ -8,8 +8,7 @@ use anyhow::{bail, Result};
 use clap::{Args, Subcommand};
 use neurarm::export::{export_fmi3_twin, export_fmu_as, FmiVersion};
 use neurarm_models::{
-    AdaptationLaw, AdaptiveCompensatorSpec, FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec,
-    PlanarArmSpec, TaskSpaceControllerSpec,
+    AdaptationLaw, FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
 };
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
 use neurarm_physics::nn::{NetKind, WeightsFile};
@@ -229,22 +228,13 @@ pub fn run(args: ExportArgs) -> Result<()> {
             if let Some(g) = &gravity {
                 sources.push(("gravity.json".into(), g.clone()));
             }
-            let spec = NnCompensatorSpec {
+            let spec = NnCompensatorSpec::of_nets(
                 joints,
-                friction: (1..=friction.len()).map(|i| format!("friction_{i}.json")).collect(),
-                gravity: gravity.as_ref().map(|_| "gravity.json".to_owned()),
-                enable_friction: !friction.is_empty(),
-                enable_gravity: gravity.is_some(),
-            };
+                (1..=friction.len()).map(|i| format!("friction_{i}.json")).collect(),
+                gravity.as_ref().map(|_| "gravity.json".to_owned()),
+            );
             let model = if adaptive {
-                ModelSpec::AdaptiveCompensator(AdaptiveCompensatorSpec {
-                    joints: spec.joints,
-                    friction: spec.friction,
-                    gravity: spec.gravity,
-                    enable_friction: spec.enable_friction,
-                    enable_gravity: spec.enable_gravity,
-                    law: AdaptationLaw::default(),
-                })
+                ModelSpec::AdaptiveCompensator(spec.adaptive(AdaptationLaw::default()))
             } else {
                 ModelSpec::NnCompensator(spec)
             };

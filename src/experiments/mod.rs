@@ -220,13 +220,11 @@ pub fn export_nn_compensator(
     if let Some(g) = gravity {
         sources.push(("gravity.json".into(), g.to_path_buf()));
     }
-    let model = ModelSpec::NnCompensator(NnCompensatorSpec {
+    let model = ModelSpec::NnCompensator(NnCompensatorSpec::of_nets(
         joints,
-        friction: friction.iter().map(|(n, _)| n.clone()).collect(),
-        gravity: gravity.map(|_| "gravity.json".to_owned()),
-        enable_friction: !friction.is_empty(),
-        enable_gravity: gravity.is_some(),
-    });
+        friction.iter().map(|(n, _)| n.clone()).collect(),
+        gravity.map(|_| "gravity.json".to_owned()),
+    ));
     export_fmu_for(&FmuSpec { identifier: identifier.into(), model }, &sources, path, platforms)?;
     Ok(path.to_path_buf())
 }

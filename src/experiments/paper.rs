@@ -845,14 +845,12 @@ fn adaptation_runs(
         if let Some(g) = gravity {
             sources.push(("gravity.json".into(), g.to_path_buf()));
         }
-        let model = ModelSpec::AdaptiveCompensator(neurarm_models::AdaptiveCompensatorSpec {
-            joints: n,
-            friction: friction.iter().map(|(name, _)| name.clone()).collect(),
-            gravity: gravity.map(|_| "gravity.json".to_owned()),
-            enable_friction: !friction.is_empty(),
-            enable_gravity: gravity.is_some(),
-            law,
-        });
+        let nets = neurarm_models::NnCompensatorSpec::of_nets(
+            n,
+            friction.iter().map(|(name, _)| name.clone()).collect(),
+            gravity.map(|_| "gravity.json".to_owned()),
+        );
+        let model = ModelSpec::AdaptiveCompensator(nets.adaptive(law));
         export(id, model, &sources)
     };
     let adaptive_friction = adaptive("AdaptiveFrictionCompensatorReal", real_friction, None, a.friction_law)?;

@@ -32,6 +32,21 @@ pub struct NnCompensatorSpec {
     pub enable_gravity: bool,
 }
 
+impl NnCompensatorSpec {
+    /// A compensator of `joints` joints from its nets' files in `resources/`: `friction` one per
+    /// joint in joint order (empty: no friction part) and `gravity`; each part given is switched
+    /// on, and only those.
+    pub fn of_nets(joints: usize, friction: Vec<String>, gravity: Option<String>) -> Self {
+        Self { joints, enable_friction: !friction.is_empty(), enable_gravity: gravity.is_some(), friction, gravity }
+    }
+
+    /// The adaptive compensator of the same nets and switches, learning by `law`.
+    pub fn adaptive(self, law: crate::AdaptationLaw) -> crate::AdaptiveCompensatorSpec {
+        let Self { joints, friction, gravity, enable_friction, enable_gravity } = self;
+        crate::AdaptiveCompensatorSpec { joints, friction, gravity, enable_friction, enable_gravity, law }
+    }
+}
+
 impl ModelKind for NnCompensatorSpec {
     fn build(&self, identifier: &str, resources: Option<&Path>) -> Result<Box<dyn Model>, BuildError> {
         check_switches((self.enable_friction, self.enable_gravity), &self.friction, self.gravity.as_deref())?;
