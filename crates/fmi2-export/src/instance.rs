@@ -184,6 +184,24 @@ pub type StateHandle = usize;
 /// freed one stays unknown.
 static NEXT_STATE_HANDLE: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(1);
 
+/// Why an FMU state given as a value is not one of this model's.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ForeignState {
+    /// Saved by an instance of another model.
+    #[error("the FMU state was saved by an instance of another model (GUID {saved_by}), this is {this} (GUID {guid})")]
+    OtherModel {
+        /// The GUID of the model that saved it.
+        saved_by: String,
+        /// This model's identifier.
+        this: String,
+        /// This model's GUID.
+        guid: String,
+    },
+    /// Its values are not this model's variables.
+    #[error("the FMU state does not hold this model's variables")]
+    OtherVariables,
+}
+
 /// Why an instance could not be made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum InstantiateError {
@@ -995,20 +1013,19 @@ impl Instance {
 
     /// Refuses a state saved by an instance of another model, or one whose values do not have
     /// this model's shape.
-    fn check_owner(&self, snapshot: &Snapshot) -> Result<(), String> {
+    fn check_owner(&self, snapshot: &Snapshot) -> Result<(), ForeignState> {
         if snapshot.model != self.guid {
-            return Err(format!(
-                "the FMU state was saved by an instance of another model (GUID {}), this is {} (GUID {})",
-                snapshot.model,
-                self.description().model_identifier,
-                self.guid
-            ));
+            return Err(ForeignState::OtherModel {
+                saved_by: snapshot.model.to_string(),
+                this: self.description().model_identifier.clone(),
+                guid: self.guid.to_string(),
+            });
         }
         let (a, b) = (&snapshot.values, &self.start_values);
         if (a.reals.len(), a.integers.len(), a.booleans.len(), a.strings.len())
             != (b.reals.len(), b.integers.len(), b.booleans.len(), b.strings.len())
         {
-            return Err("the FMU state does not hold this model's variables".into());
+            return Err(ForeignState::OtherVariables);
         }
         Ok(())
     }
@@ -1018,7 +1035,7 @@ impl Instance {
         if let Err(s) = self.check_phase("fmi2SetFMUstate", Function::FmuState) {
             return s;
         }
-        if let Err(e) = self.check_owner(snapshot).and_then(|()| self.check_snapshot(snapshot)) {
+        if let Err(e) = self.check_owner(snapshot).map_err(|e| e.to_string()).and_then(|()| self.check_snapshot(snapshot)) {
             return self.error(&format!("{}: {e}", self.api.name("fmi2SetFMUstate")));
         }
         if let Err(e) = self.model.load_state(&snapshot.values, &snapshot.internal) {

@@ -45,32 +45,43 @@ pub fn library_extension(platform: &str) -> Option<&'static str> {
 
 /// The file format and architecture of each library in `bytes`: one, or several for a
 /// universal Mach-O.
-fn slices(bytes: &[u8]) -> Result<Vec<(object::BinaryFormat, object::Architecture)>, String> {
+fn slices(bytes: &[u8]) -> Result<Vec<(object::BinaryFormat, object::Architecture)>, NotALibrary> {
     use object::read::macho::FatArch;
     use object::{BinaryFormat as F, Object};
-    let kind = object::FileKind::parse(bytes).map_err(|e| format!("not a shared library ({e})"))?;
+    let kind = object::FileKind::parse(bytes).map_err(NotALibrary::Unknown)?;
     Ok(match kind {
         object::FileKind::MachOFat32 => {
-            let fat = object::read::macho::MachOFatFile32::parse(bytes).map_err(|e| format!("a broken universal Mach-O ({e})"))?;
+            let fat = object::read::macho::MachOFatFile32::parse(bytes).map_err(NotALibrary::BrokenUniversal)?;
             fat.arches().iter().map(|a| (F::MachO, a.architecture())).collect()
         }
         object::FileKind::MachOFat64 => {
-            let fat = object::read::macho::MachOFatFile64::parse(bytes).map_err(|e| format!("a broken universal Mach-O ({e})"))?;
+            let fat = object::read::macho::MachOFatFile64::parse(bytes).map_err(NotALibrary::BrokenUniversal)?;
             fat.arches().iter().map(|a| (F::MachO, a.architecture())).collect()
         }
-        _ => {
-            let file = object::File::parse(bytes).map_err(|e| format!("not a shared library ({e})"))?;
-            vec![(file.format(), file.architecture())]
-        }
+        _ => vec![object::File::parse(bytes).map(|file| (file.format(), file.architecture())).map_err(NotALibrary::Unknown)?],
     })
 }
 
+/// Why bytes given as a shared library are none.
+#[derive(Debug, thiserror::Error)]
+pub enum NotALibrary {
+    /// Not a file format a platform loads libraries from.
+    #[error("not a shared library ({0})")]
+    Unknown(object::read::Error),
+    /// A universal Mach-O whose header does not hold together.
+    #[error("a broken universal Mach-O ({0})")]
+    BrokenUniversal(object::read::Error),
+    /// A library, but not a Mach-O one.
+    #[error("not a Mach-O library")]
+    NotMachO,
+}
+
 /// The architectures of a macOS library, thin or universal: `"x86_64"`, `"arm64"`.
-pub fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, String> {
+pub fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, NotALibrary> {
     use object::{Architecture as A, BinaryFormat as F};
     let slices = slices(bytes)?;
     if slices.iter().any(|(f, _)| *f != F::MachO) {
-        return Err("not a Mach-O library".into());
+        return Err(NotALibrary::NotMachO);
     }
     Ok(slices
         .iter()
@@ -88,7 +99,7 @@ pub fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, String> {
 /// written, not when a user's tool fails to load it.
 pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), String> {
     use object::{Architecture as A, BinaryFormat as F};
-    let slices = slices(bytes)?;
+    let slices = slices(bytes).map_err(|e| e.to_string())?;
     let accepted: &[(F, A)] = match platform {
         "linux64" => &[(F::Elf, A::X86_64), (F::Elf, A::Aarch64)],
         "linux32" => &[(F::Elf, A::I386), (F::Elf, A::Arm)],

@@ -240,9 +240,14 @@ fn quiet_caught_panics() {
     });
 }
 
+/// A panic caught by [`catch_panic`]: its message and, after it, where it happened.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct CaughtPanic(String);
+
 /// Runs `body`, turning a panic into its message and place (`Err`), so that no panic unwinds
 /// into the host and none is printed on its console: the caller logs it through the host.
-pub fn catch_panic<R>(body: impl FnOnce() -> R) -> Result<R, String> {
+pub fn catch_panic<R>(body: impl FnOnce() -> R) -> Result<R, CaughtPanic> {
     quiet_caught_panics();
     let was = CATCHING.with(|c| c.replace(true));
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(body));
@@ -253,10 +258,10 @@ pub fn catch_panic<R>(body: impl FnOnce() -> R) -> Result<R, String> {
             .map(|s| s.to_string())
             .or_else(|| panic.downcast_ref::<String>().cloned())
             .unwrap_or_else(|| "unknown panic".into());
-        match PANIC_AT.with(|p| p.replace(Place::NONE)).text() {
+        CaughtPanic(match PANIC_AT.with(|p| p.replace(Place::NONE)).text() {
             at if at.is_empty() => message,
             at => format!("{message}, at {at}"),
-        }
+        })
     })
 }
 

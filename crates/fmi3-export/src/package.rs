@@ -26,7 +26,7 @@ pub fn platform_folders(platform: &str, bytes: &[u8]) -> Result<Vec<&'static str
         "darwin64" => {
             let mut folders = Vec::new();
             for (architecture, folder) in [("x86_64", "x86_64-darwin"), ("arm64", "aarch64-darwin")] {
-                if macho_architectures(bytes)?.contains(&architecture) {
+                if macho_architectures(bytes).map_err(|e| e.to_string())?.contains(&architecture) {
                     folders.push(folder);
                 }
             }
