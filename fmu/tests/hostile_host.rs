@@ -18,6 +18,11 @@ use neurarm_physics::arm::ArmParams;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::TaskSpaceGains;
 
+/// The compensator of `fmu_with_nets`' four friction nets and gravity net.
+fn all_nets() -> NnCompensatorSpec {
+    NnCompensatorSpec::of_nets(4, (1..=4).map(|j| format!("friction_{j}.json")).collect(), Some("gravity.json".into()))
+}
+
 /// One FMU of every model kind the binary serves.
 fn every_kind() -> Vec<(&'static str, Fmu)> {
     let arm = ArmParams::default_four_link();
@@ -26,33 +31,8 @@ fn every_kind() -> Vec<(&'static str, Fmu)> {
     let spec = |identifier: &str, model| FmuSpec { identifier: identifier.into(), model };
     vec![
         ("PlanarArm", plain(FmuSpec::planar_arm("PlanarArm", ArmConfig::default()))),
-        (
-            "NnCompensator",
-            nets(
-                "NnCompensator",
-                ModelSpec::NnCompensator(NnCompensatorSpec {
-                    joints: 4,
-                    friction: (1..=4).map(|j| format!("friction_{j}.json")).collect(),
-                    gravity: Some("gravity.json".into()),
-                    enable_friction: true,
-                    enable_gravity: true,
-                }),
-            ),
-        ),
-        (
-            "AdaptiveCompensator",
-            nets(
-                "AdaptiveCompensator",
-                ModelSpec::AdaptiveCompensator(AdaptiveCompensatorSpec {
-                    joints: 4,
-                    friction: (1..=4).map(|j| format!("friction_{j}.json")).collect(),
-                    gravity: Some("gravity.json".into()),
-                    enable_friction: true,
-                    enable_gravity: true,
-                    law: AdaptationLaw::default(),
-                }),
-            ),
-        ),
+        ("NnCompensator", nets("NnCompensator", ModelSpec::NnCompensator(all_nets()))),
+        ("AdaptiveCompensator", nets("AdaptiveCompensator", ModelSpec::AdaptiveCompensator(all_nets().adaptive(AdaptationLaw::default())))),
         (
             "IdealCompensator",
             plain(spec(
