@@ -7,6 +7,8 @@
 //! control), `neurarm-models` (the models behind the FMUs), `fmi2-export` (the FMI 2.0
 //! export layer) and `neurarm-cosim` (the co-simulation master).
 
+#![forbid(unsafe_code)]
+
 pub mod experiments;
 pub mod export;
 pub mod identify;

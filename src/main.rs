@@ -1,5 +1,7 @@
 //! The `neurarm` command line: a thin shell over the library.
 
+#![forbid(unsafe_code)]
+
 mod cli;
 
 use std::process::ExitCode;

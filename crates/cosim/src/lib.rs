@@ -59,6 +59,8 @@
 //! # }
 //! ```
 
+#![forbid(unsafe_code)]
+
 mod capture;
 pub mod error;
 pub mod interface;

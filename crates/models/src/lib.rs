@@ -10,6 +10,8 @@
 //! model, and the [`ModelKind`] entry that builds it, names its resource files and documents
 //! its equations. [`ModelSpec`] lists the kinds.
 
+#![forbid(unsafe_code)]
+
 pub mod adaptive;
 pub mod compensator;
 pub mod ideal;
