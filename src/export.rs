@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use fmi2_export::package::{select_binaries, PLATFORM};
+use neurarm_fmi_export::package::{select_binaries, PLATFORM};
 use neurarm_models::{FmuSpec, SPEC_FILE};
 
 /// File name of the FMU binary that `cargo build --release` makes.
@@ -174,8 +174,8 @@ pub fn export_fmu_as(
     let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
     let packed = staging.path().join(format!("{}.fmu", spec.identifier));
     match version {
-        FmiVersion::Fmi2 => fmi2_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html()),
-        FmiVersion::Fmi3 => fmi3_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html()),
+        FmiVersion::Fmi2 => neurarm_fmi_export::fmi2::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html()),
+        FmiVersion::Fmi3 => neurarm_fmi_export::fmi3::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html()),
     }
     .map_err(|e| format!("packing {}: {e}", path.display()))?;
     let bytes = std::fs::read(&packed).map_err(|e| format!("reading the packed {}: {e}", path.display()))?;
@@ -240,7 +240,7 @@ pub fn export_fmi3_twin(fmi2_fmu: &Path, path: &Path) -> Result<(), String> {
     let binaries: Vec<(&str, &Path)> = binaries.iter().map(|(p, b)| (p.as_str(), b.as_path())).collect();
     let files: Vec<(&str, Vec<u8>)> = resources.iter().map(|(n, b)| (n.as_str(), b.clone())).collect();
     let packed = staging.path().join(format!("{}.fmu", spec.identifier));
-    fmi3_export::package::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html())
+    neurarm_fmi_export::fmi3::write_fmu(&packed, model.description(), &binaries, &files, spec.equations_html())
         .map_err(|e| format!("packing {}: {e}", path.display()))?;
     let bytes = std::fs::read(&packed).map_err(|e| format!("reading the packed {}: {e}", path.display()))?;
     crate::output::write_bytes(path, &bytes).map_err(|e| format!("writing {}: {e}", path.display()))

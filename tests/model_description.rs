@@ -4,14 +4,14 @@
 
 use std::path::Path;
 
-use fmi2_export::description::Causality;
+use neurarm_fmi_export::description::Causality;
 use neurarm_models::FmuSpec;
 use neurarm_physics::config::ArmConfig;
 
 fn check(name: &str, spec: FmuSpec) {
     let description = spec.description().unwrap();
     compare(&format!("{name}.xml"), &description.to_xml());
-    compare(&format!("{name}.fmi3.xml"), &fmi3_export::description::to_xml(&description));
+    compare(&format!("{name}.fmi3.xml"), &neurarm_fmi_export::fmi3::description::to_xml(&description));
 }
 
 fn compare(file: &str, xml: &str) {
@@ -55,7 +55,7 @@ fn model_structure_indices_are_one_based_positions_of_outputs() {
 #[test]
 fn fmi3_value_references_are_positions_and_unique() {
     let d = FmuSpec::planar_arm("PlanarArm", ArmConfig::default()).description().unwrap();
-    let xml = fmi3_export::description::to_xml(&d);
+    let xml = neurarm_fmi_export::fmi3::description::to_xml(&d);
     let start = xml.find("<ModelVariables>").unwrap();
     let end = xml.find("</ModelVariables>").unwrap();
     let vrs: Vec<u32> = xml[start..end].split("valueReference=\"").skip(1).map(|s| s[..s.find('"').unwrap()].parse().unwrap()).collect();
@@ -145,7 +145,7 @@ fn nn_compensator_model_description_has_not_drifted() {
     };
     let model = spec.build_from(Some(dir.path())).unwrap();
     compare("NnCompensator.xml", &model.description().to_xml());
-    compare("NnCompensator.fmi3.xml", &fmi3_export::description::to_xml(model.description()));
+    compare("NnCompensator.fmi3.xml", &neurarm_fmi_export::fmi3::description::to_xml(model.description()));
 }
 
 /// A friction net whose input is encoded as angles is refused by name; a periodic gravity net

@@ -3,8 +3,8 @@
 //! models. Each `.fmu` ships a copy named after its model identifier; `resources/neurarm.toml`
 //! says which model it holds.
 
-fmi2_export::export_fmi2!(neurarm_models::instantiate);
-fmi3_export::export_fmi3!(neurarm_models::instantiate);
+neurarm_fmi_export::export_fmi2!(neurarm_models::instantiate);
+neurarm_fmi_export::export_fmi3!(neurarm_models::instantiate);
 
 /// The marker of the sources this binary was built from (see `build.rs`): a NUL-terminated
 /// `neurarm-fmu-sources:<16 hex digits>`.

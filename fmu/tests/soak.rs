@@ -19,8 +19,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use common::*;
-use fmi2_export::description::BaseType;
-use fmi2_export::Causality;
+use neurarm_fmi_export::description::BaseType;
+use neurarm_fmi_export::Causality;
 use neurarm_models::*;
 use neurarm_physics::arm::ArmParams;
 use neurarm_physics::config::ArmConfig;

@@ -134,7 +134,7 @@ struct Input {
 const SLOTS: usize = 4;
 const CATEGORIES: [&std::ffi::CStr; 5] = [c"logStatusError", c"logStatusWarning", c"logCalls", c"logAll", c""];
 
-fn instantiate_as(fixture: &Fixture, how: &Instantiation, logging: bool) -> fmi2_export::abi::Component {
+fn instantiate_as(fixture: &Fixture, how: &Instantiation, logging: bool) -> neurarm_fmi_export::fmi2::abi::Component {
     let (name, guid, uri): (&std::ffi::CStr, &std::ffi::CStr, Option<&std::ffi::CStr>) = match how {
         Instantiation::EmptyName => (c"", &fixture.guid, Some(&fixture.uri)),
         Instantiation::WrongGuid => (c"x", c"{00000000-0000-0000-0000-000000000000}", Some(&fixture.uri)),
@@ -163,7 +163,7 @@ fn run(input: Input) {
     if c.is_null() {
         return;
     }
-    let mut slots: [fmi2_export::abi::FmuState; SLOTS] = [std::ptr::null_mut(); SLOTS];
+    let mut slots: [neurarm_fmi_export::fmi2::abi::FmuState; SLOTS] = [std::ptr::null_mut(); SLOTS];
     // Steps of an arm may each take up to its work bound (a fraction of a second, many times
     // that under the sanitizer): a few per input keep every input within the time limit while
     // still reaching the bound.

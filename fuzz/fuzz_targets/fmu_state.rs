@@ -9,7 +9,7 @@
 
 use std::sync::OnceLock;
 
-use fmi2_export::abi::Component;
+use neurarm_fmi_export::fmi2::abi::Component;
 use libfuzzer_sys::fuzz_target;
 use neurarm_fuzz::*;
 

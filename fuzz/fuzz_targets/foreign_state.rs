@@ -9,7 +9,7 @@
 
 #![no_main]
 
-use fmi2_export::abi::{Component, FmuState};
+use neurarm_fmi_export::fmi2::abi::{Component, FmuState};
 use libfuzzer_sys::arbitrary::{self, Arbitrary, Unstructured};
 use libfuzzer_sys::fuzz_target;
 use neurarm_fuzz::*;

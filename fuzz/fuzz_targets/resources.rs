@@ -52,7 +52,7 @@ fuzz_target!(|data: &[u8]| {
     let reals: Vec<u32> = description
         .variables
         .iter()
-        .filter(|v| v.base_type() == fmi2_export::description::BaseType::Real)
+        .filter(|v| v.base_type() == neurarm_fmi_export::description::BaseType::Real)
         .map(|v| v.value_reference)
         .collect();
     unsafe {

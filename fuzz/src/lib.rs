@@ -15,9 +15,9 @@ use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::Path;
 use std::sync::OnceLock;
 
-use fmi2_export::abi::{CallbackFunctions, Component, FmuState};
-use fmi2_export::description::{BaseType, ModelDescription};
-use fmi2_export::Causality;
+use neurarm_fmi_export::fmi2::abi::{CallbackFunctions, Component, FmuState};
+use neurarm_fmi_export::description::{BaseType, ModelDescription};
+use neurarm_fmi_export::Causality;
 use nalgebra::{DMatrix, DVector};
 use neurarm_models::*;
 use neurarm_physics::arm::{ArmParams, FrictionBranch, JointFriction};

@@ -1,4 +1,4 @@
-"""The Van der Pol example FMU (examples/van-der-pol, written on fmi2-export, nothing to do with
+"""The Van der Pol example FMU (examples/van-der-pol, written on neurarm-fmi-export, nothing to do with
 robots) under fmpy: it validates; fmpy's own master runs it and the trajectory matches scipy's
 solve_ivp of the same equation to 1e-6 at mu = 1; at mu = 0 it is x0 cos t; a tuned mu between
 steps takes effect; a forced oscillator follows the forcing fmpy feeds it."""

@@ -37,8 +37,10 @@
 
 use std::path::Path;
 
-use fmi2_export::codec::{Put, Reader};
-use fmi2_export::{BooleanVar, Causality, Model, ModelDescription, ModelError, RealVar, StringVar, TableBuilder, Values, Variability};
+use neurarm_fmi_export::codec::{Put, Reader};
+use neurarm_fmi_export::{
+    BooleanVar, Causality, Model, ModelDescription, ModelError, RealVar, StringVar, TableBuilder, Values, Variability,
+};
 use neurarm_physics::nn::{EncodedNet, WeightsFile};
 use serde::{Deserialize, Serialize};
 

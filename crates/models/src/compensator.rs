@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use fmi2_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
+use neurarm_fmi_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
 use neurarm_physics::nn::{EncodedNet, InputEncoding, NetKind, Signal, WeightsFile};
 use serde::{Deserialize, Serialize};
 

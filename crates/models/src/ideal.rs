@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use fmi2_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
+use neurarm_fmi_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
 use neurarm_physics::arm::{gravity_torques_into, ArmData, ArmParams, OperatingChange};
 use serde::{Deserialize, Serialize};
 

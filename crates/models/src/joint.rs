@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use fmi2_export::{BooleanVar, Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
+use neurarm_fmi_export::{BooleanVar, Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use serde::{Deserialize, Serialize};
 
 use crate::ports::ControllerInputs;

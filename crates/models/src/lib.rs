@@ -1,4 +1,4 @@
-//! The models neurarm ships as FMUs, on the [`fmi2_export`] layer, and the registry the one
+//! The models neurarm ships as FMUs, on the [`neurarm_fmi_export`] layer, and the registry the one
 //! FMU binary uses to make them.
 //!
 //! Every `.fmu` carries the same binary and a spec file, `resources/neurarm.toml`, that says
@@ -24,7 +24,7 @@ pub mod units;
 
 use std::path::{Path, PathBuf};
 
-use fmi2_export::{DefaultExperiment, DescriptionError, Model, ModelDescription, ModelError, RealVar, TableBuilder, Variable};
+use neurarm_fmi_export::{DefaultExperiment, DescriptionError, Model, ModelDescription, ModelError, RealVar, TableBuilder, Variable};
 use serde::{Deserialize, Serialize};
 
 pub use adaptive::{AdaptationLaw, AdaptiveCompensatorSpec};
@@ -205,7 +205,7 @@ pub(crate) fn per_joint(b: &mut TableBuilder, n: usize, add: impl Fn(&mut TableB
 /// A start value that is not a finite number (a spec saying `k = nan`) is refused by name.
 pub(crate) fn describe(identifier: &str, text: String, variables: Vec<Variable>) -> Result<ModelDescription, BuildError> {
     for v in &variables {
-        if let fmi2_export::Kind::Real { start: Some(start), .. } = v.kind {
+        if let neurarm_fmi_export::Kind::Real { start: Some(start), .. } = v.kind {
             if !start.is_finite() {
                 return Err(BuildError::Spec(format!("the start value of '{}' is {start}, not a finite number", v.name)));
             }

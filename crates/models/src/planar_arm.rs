@@ -11,8 +11,8 @@
 
 use std::path::Path;
 
-use fmi2_export::codec::{Put, Reader, StateError};
-use fmi2_export::{Causality, IntegerVar, Model, ModelDescription, ModelError, RealVar, TableBuilder, Unit, Values, Variability};
+use neurarm_fmi_export::codec::{Put, Reader, StateError};
+use neurarm_fmi_export::{Causality, IntegerVar, Model, ModelDescription, ModelError, RealVar, TableBuilder, Unit, Values, Variability};
 use neurarm_physics::arm::{
     end_effector_state, ArmParams, ArmSimulator, ArmState, FrictionBranch, OperatingChange, ParamError, Sensors, StepError,
 };

@@ -6,7 +6,7 @@
 //! `enable_gravity`. Every controller has the inputs a compensator's `tau_comp_i` and an arm's
 //! measurements feed: `q_i`, `qd_i`, `tau_comp_i`.
 
-use fmi2_export::{BooleanVar, RealVar, TableBuilder, Values};
+use neurarm_fmi_export::{BooleanVar, RealVar, TableBuilder, Values};
 
 use neurarm_physics::arm::{OperatingChange, ParamError};
 

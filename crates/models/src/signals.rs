@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use fmi2_export::codec::{Put, Reader};
-use fmi2_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
+use neurarm_fmi_export::codec::{Put, Reader};
+use neurarm_fmi_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use serde::{Deserialize, Serialize};
 
 use crate::{describe, BuildError, ModelKind};

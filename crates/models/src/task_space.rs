@@ -13,8 +13,8 @@
 
 use std::path::Path;
 
-use fmi2_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use nalgebra::Vector2;
+use neurarm_fmi_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use neurarm_physics::arm::{end_effector_position, ArmParams};
 use neurarm_physics::control::{
     scaled_reference, task_learning_signal_into, task_space_torque_into, LearningSignalData, TaskReference, TaskSpaceData, TaskSpaceGains,
@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use crate::ports::ControllerInputs;
 use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN, RADIAN_PER_SECOND};
 use crate::{describe, per_joint, BuildError, ModelKind};
-use fmi2_export::Unit;
+use neurarm_fmi_export::Unit;
 
 /// Default λ of the learning signal [1/s]: the position error's weight, between 0 and the
 /// paper's K_d = 160 (the Lyapunov argument needs 0 < λ < K_d).

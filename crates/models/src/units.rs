@@ -1,7 +1,7 @@
 //! The units neurarm's models use, declared here with their SI base exponents (the FMI layer
 //! lists in each `modelDescription.xml` the ones its variables use).
 
-use fmi2_export::Unit;
+use neurarm_fmi_export::Unit;
 
 /// Metre.
 pub const METRE: Unit = Unit::new("m").m(1);

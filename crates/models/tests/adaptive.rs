@@ -6,8 +6,8 @@
 #[path = "support/nets.rs"]
 mod nets;
 
-use fmi2_export::instance::{Instance, Status};
 use nets::net_file;
+use neurarm_fmi_export::instance::{Instance, Status};
 use neurarm_models::*;
 use neurarm_physics::nn::WeightsFile;
 

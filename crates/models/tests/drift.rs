@@ -4,7 +4,7 @@
 #[path = "../../physics/tests/support/counting.rs"]
 mod counting;
 
-use fmi2_export::instance::{Instance, Status};
+use neurarm_fmi_export::instance::{Instance, Status};
 use neurarm_models::*;
 use neurarm_physics::arm::{ArmParams, ArmSimulator, ArmState, IntegratorSettings, OperatingChange};
 use neurarm_physics::config::ArmConfig;

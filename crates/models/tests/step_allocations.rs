@@ -9,9 +9,9 @@ mod counting;
 mod nets;
 
 use counting::allocations_during;
-use fmi2_export::instance::{Instance, Status};
-use fmi2_export::Model;
 use nets::net_file;
+use neurarm_fmi_export::instance::{Instance, Status};
+use neurarm_fmi_export::Model;
 use neurarm_models::*;
 use neurarm_physics::arm::ArmParams;
 use neurarm_physics::config::ArmConfig;
@@ -25,11 +25,11 @@ fn step_allocations(model: Box<dyn Model>) -> usize {
     let inputs: Vec<u32> = description
         .variables
         .iter()
-        .filter(|v| v.causality == fmi2_export::Causality::Input && v.base_type() == fmi2_export::description::BaseType::Real)
+        .filter(|v| v.causality == neurarm_fmi_export::Causality::Input && v.base_type() == neurarm_fmi_export::description::BaseType::Real)
         .map(|v| v.value_reference)
         .collect();
     let outputs: Vec<u32> =
-        description.variables.iter().filter(|v| v.causality == fmi2_export::Causality::Output).map(|v| v.value_reference).collect();
+        description.variables.iter().filter(|v| v.causality == neurarm_fmi_export::Causality::Output).map(|v| v.value_reference).collect();
     let name = description.model_identifier.clone();
     let mut instance = Instance::new("probe", &description.guid(), model, Box::new(|_, _, m| eprintln!("{m}")), false).unwrap();
     assert_eq!(instance.setup_experiment(None, 0.0, None), Status::Ok);

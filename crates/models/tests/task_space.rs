@@ -3,7 +3,7 @@
 //! dynamics from those torques (H⁻¹ (τ − τ_comp − C q̇ − g)), not from the law's own numbers;
 //! where that lead points against a moving joint's motion, the measured speed alone.
 
-use fmi2_export::instance::{Instance, Status};
+use neurarm_fmi_export::instance::{Instance, Status};
 use neurarm_models::*;
 use neurarm_physics::arm::{coriolis_centrifugal, gravity_torques, mass_matrix, ArmParams};
 use neurarm_physics::control::TaskSpaceGains;
@@ -99,7 +99,7 @@ fn a_time_at_which_the_reference_overflows_fails_initialization_by_name() {
         q_start: vec![-0.4, 0.9, 0.7, 0.5],
     });
     let mut built = FmuSpec { identifier: "Ctl".into(), model: spec }.build_from(None).unwrap();
-    let mut values = fmi2_export::Values::start(built.description());
+    let mut values = neurarm_fmi_export::Values::start(built.description());
     let e = built.initialize(&mut values, 1.7e308).expect_err("refused").to_string();
     assert!(e.contains("the reference at t = 1.7e308 s is not finite"), "{e}");
     assert!(built.initialize(&mut values, 0.0).is_ok());

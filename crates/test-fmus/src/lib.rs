@@ -1,4 +1,4 @@
-//! Small FMI 2.0 Co-Simulation FMUs on `fmi2-export` for testing masters: each exercises one
+//! Small FMI 2.0 and 3.0 Co-Simulation FMUs on `neurarm-fmi-export` for testing masters: each exercises one
 //! thing the standard allows and a general master must handle. One binary serves them all; an
 //! FMU's `resources/model.txt` names its model. [`fmu_in`] packages one, [`fmu3_in`] its FMI 3.0
 //! twin (the same binary, which exports both APIs).
@@ -19,8 +19,8 @@ pub mod package;
 
 use std::path::Path;
 
-use fmi2_export::codec::{Put, Reader};
-use fmi2_export::{
+use neurarm_fmi_export::codec::{Put, Reader};
+use neurarm_fmi_export::{
     BooleanVar, Causality, EnumerationType, IntegerVar, Model, ModelDescription, ModelError, RealVar, StaticModel, StringVar, TableBuilder,
     Unit, Values, Variability,
 };
@@ -359,5 +359,5 @@ fn factory(resources: Option<&Path>) -> Result<Box<dyn Model>, ModelError> {
     model.build()
 }
 
-fmi2_export::export_fmi2!(factory);
-fmi3_export::export_fmi3!(factory);
+neurarm_fmi_export::export_fmi2!(factory);
+neurarm_fmi_export::export_fmi3!(factory);

@@ -1,6 +1,6 @@
 //! Packaging the built library as the test FMUs.
 
-use fmi2_export::ModelDescription;
+use neurarm_fmi_export::ModelDescription;
 use std::path::{Path, PathBuf};
 
 use crate::{TestModel, MODEL_FILE};
@@ -33,12 +33,12 @@ pub fn built_library() -> Result<PathBuf, String> {
 
 /// `<Identifier>.fmu` of `model` in `dir`, packaged from the built library.
 pub fn fmu_in(dir: &Path, model: TestModel) -> Result<PathBuf, String> {
-    package(&dir.join(format!("{}.fmu", model.identifier())), model, fmi2_export::package::write_fmu)
+    package(&dir.join(format!("{}.fmu", model.identifier())), model, neurarm_fmi_export::fmi2::write_fmu)
 }
 
 /// `<Identifier>.fmi3.fmu` of `model` in `dir`: its FMI 3.0 twin, from the same library.
 pub fn fmu3_in(dir: &Path, model: TestModel) -> Result<PathBuf, String> {
-    package(&dir.join(format!("{}.fmi3.fmu", model.identifier())), model, fmi3_export::package::write_fmu)
+    package(&dir.join(format!("{}.fmi3.fmu", model.identifier())), model, neurarm_fmi_export::fmi3::write_fmu)
 }
 
 /// The signature both versions' `write_fmu` share.
@@ -47,7 +47,13 @@ type WriteFmu = fn(&Path, &ModelDescription, &[(&str, &Path)], &[(&str, Vec<u8>)
 fn package(out: &Path, model: TestModel, write_fmu: WriteFmu) -> Result<PathBuf, String> {
     let built = model.build().map_err(|e| e.to_string())?;
     let resources = [(MODEL_FILE, model.identifier().as_bytes().to_vec())];
-    write_fmu(out, built.description(), &[(fmi2_export::package::PLATFORM.0, &built_library()?)], &resources, model.equations_html())
-        .map_err(|e| format!("writing {}: {e}", out.display()))?;
+    write_fmu(
+        out,
+        built.description(),
+        &[(neurarm_fmi_export::package::PLATFORM.0, &built_library()?)],
+        &resources,
+        model.equations_html(),
+    )
+    .map_err(|e| format!("writing {}: {e}", out.display()))?;
     Ok(out.to_path_buf())
 }

@@ -1,7 +1,7 @@
 //! The test models through the export layer's instance, as a host drives them: the statuses
 //! and refusals a master relies on.
 
-use fmi2_export::instance::{Instance, Status};
+use neurarm_fmi_export::instance::{Instance, Status};
 use neurarm_test_fmus::TestModel;
 
 fn instance(model: TestModel) -> Instance {

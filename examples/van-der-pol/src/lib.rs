@@ -1,10 +1,10 @@
 //! The Van der Pol oscillator `ẍ = μ (1 − x²) ẋ − x + u` as an FMI 2.0 Co-Simulation FMU on
-//! `fmi2-export`: model, variable table, state and C ABI. [`package`] makes the `.fmu`.
+//! `neurarm-fmi-export`: model, variable table, state and C ABI. [`package`] makes the `.fmu`.
 
 pub mod package;
 
-use fmi2_export::codec::{Put, Reader};
-use fmi2_export::{Model, ModelDescription, ModelError, RealVar, TableBuilder, Values};
+use neurarm_fmi_export::codec::{Put, Reader};
+use neurarm_fmi_export::{Model, ModelDescription, ModelError, RealVar, TableBuilder, Values};
 
 /// The oscillator: a variable table and the state (x, ẋ).
 pub struct VanDerPol {
@@ -23,7 +23,7 @@ impl VanDerPol {
         let mu = b.tunable("mu", None, 1.0, "Damping parameter");
         let x0 = b.parameter("x0", None, 2.0, "Initial position");
         let v0 = b.parameter("v0", None, 0.0, "Initial velocity");
-        let description = ModelDescription::new("VanDerPol", "Van der Pol oscillator (fmi2-export example)", b.finish())?;
+        let description = ModelDescription::new("VanDerPol", "Van der Pol oscillator (neurarm-fmi-export example)", b.finish())?;
         Ok(Self { description, vars: [u, x, v, mu, x0, v0], state: [0.0; 2] })
     }
 }
@@ -86,4 +86,4 @@ fn factory(_resources: Option<&std::path::Path>) -> Result<Box<dyn Model>, Model
     Ok(Box::new(VanDerPol::new()?))
 }
 
-fmi2_export::export_fmi2!(factory);
+neurarm_fmi_export::export_fmi2!(factory);

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use fmi2_export::Model;
+use neurarm_fmi_export::Model;
 
 /// The library's file name as cargo builds it.
 pub const LIBRARY: &str = "libvan_der_pol.so";
@@ -16,7 +16,7 @@ pub const EQUATIONS_HTML: &str = "<p><code>ẍ = μ (1 − x²) ẋ − x + u</c
 pub fn write_fmu(binaries: &[(String, PathBuf)], out: &Path) -> Result<(), String> {
     let model = crate::VanDerPol::new().map_err(|e| e.to_string())?;
     let binaries: Vec<(&str, &Path)> = binaries.iter().map(|(p, b)| (p.as_str(), b.as_path())).collect();
-    fmi2_export::package::write_fmu(out, model.description(), &binaries, &[], EQUATIONS_HTML)
+    neurarm_fmi_export::fmi2::write_fmu(out, model.description(), &binaries, &[], EQUATIONS_HTML)
         .map_err(|e| format!("writing {}: {e}", out.display()))
 }
 
@@ -26,7 +26,7 @@ pub fn write_fmu(binaries: &[(String, PathBuf)], out: &Path) -> Result<(), Strin
 pub fn built_binaries() -> Result<Vec<(String, PathBuf)>, String> {
     let host = built_library()?;
     let cross = std::env::var_os("VAN_DER_POL_PLATFORMS").map(PathBuf::from).or_else(|| host.parent().map(|d| d.join("fmu-binaries")));
-    fmi2_export::package::select_binaries(Some(host), cross.as_deref(), "van_der_pol", None)
+    neurarm_fmi_export::package::select_binaries(Some(host), cross.as_deref(), "van_der_pol", None)
 }
 
 /// The built library: `$VAN_DER_POL_BINARY`, else beside the running program (or one folder

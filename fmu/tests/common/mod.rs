@@ -6,7 +6,7 @@ use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use fmi2_export::description::{BaseType, ModelDescription};
+use neurarm_fmi_export::description::{BaseType, ModelDescription};
 use neurarm_models::{FmuSpec, SPEC_FILE};
 use neurarm_physics::nn::NetKind;
 

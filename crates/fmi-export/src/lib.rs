@@ -1,16 +1,18 @@
-//! Write FMI 2.0 Co-Simulation FMUs in Rust.
+//! Write FMI 2.0 and FMI 3.0 Co-Simulation FMUs in Rust, from one model.
 //!
 //! A model implements [`Model`] (or the simpler [`StaticModel`], for outputs that are a
 //! function of inputs, parameters and time) over one table of variables built with
 //! [`TableBuilder`]. From that table this crate makes both `modelDescription.xml`
-//! ([`ModelDescription::to_xml`]) and the dispatch of the C ABI, so the two cannot disagree.
-//! The layer does the rest of the standard:
+//! ([`ModelDescription::to_xml`] for FMI 2.0, [`fmi3::description::to_xml`] for FMI 3.0) and
+//! the dispatch of the C ABIs, so they cannot disagree. The layer does the rest of the
+//! standards:
 //!
 //! - every `fmi2*` function of the Co-Simulation interface as an `extern "C"` symbol
-//!   ([`export_fmi2!`]), each behind `catch_unwind`: a panic becomes `fmi2Fatal`, never an
-//!   unwind into the host;
-//! - the state machine of FMI 2.0 section 4.2.4 and argument checks ([`instance`]): a call in
-//!   the wrong state or with a bad argument (unknown value reference, wrong type, a variable
+//!   ([`export_fmi2!`], module [`fmi2`]), and every `fmi3*` function ([`export_fmi3!`], module
+//!   [`fmi3`]), each behind `catch_unwind`: a panic becomes `fmi2Fatal`/`fmi3Fatal`, never an
+//!   unwind into the host; one library can carry both;
+//! - one state machine for both versions (FMI 2.0 section 4.2.4) and argument checks
+//!   ([`instance`]): a call in the wrong state or with a bad argument (unknown value reference, wrong type, a variable
 //!   that may not be set now, NaN, a step of 0) returns `fmi2Error` and logs why;
 //! - FMU states (`fmi2GetFMUstate`, `fmi2SetFMUstate`), held by the instance that saved them
 //!   behind numeric handles (a foreign handle is refused, never read; states left unfreed go
@@ -18,7 +20,8 @@
 //!   ([`codec`] for a model's own part);
 //! - the GUID, a hash of the model description, checked at instantiation;
 //! - units declared by the models that use them ([`Unit`]): `UnitDefinitions` lists those;
-//! - packaging into a `.fmu` ([`package`], feature `package`, on by default).
+//! - packaging into a `.fmu` ([`fmi2::write_fmu`], [`fmi3::write_fmu`], the shared
+//!   [`package`] checks; feature `package`, on by default).
 //!
 //! It depends on no numerics and no robotics: it serves anyone's Rust model.
 //!
@@ -28,9 +31,9 @@
 //! driven here in process through [`Instance`], as a host would through the C ABI.
 //!
 //! ```
-//! use fmi2_export::{Model, ModelDescription, ModelError, RealVar, TableBuilder, Unit, Values};
-//! use fmi2_export::codec::{Put, Reader};
-//! use fmi2_export::instance::{Instance, Status};
+//! use neurarm_fmi_export::{Model, ModelDescription, ModelError, RealVar, TableBuilder, Unit, Values};
+//! use neurarm_fmi_export::codec::{Put, Reader};
+//! use neurarm_fmi_export::instance::{Instance, Status};
 //!
 //! const VOLT: Unit = Unit::new("V").kg(1).m(2).s(-3).ampere(-1);
 //!
@@ -77,7 +80,8 @@
 //! fn factory(_resources: Option<&std::path::Path>) -> Result<Box<dyn Model>, ModelError> {
 //!     Ok(Box::new(Lag::new()?))
 //! }
-//! fmi2_export::export_fmi2!(factory);
+//! neurarm_fmi_export::export_fmi2!(factory);
+//! neurarm_fmi_export::export_fmi3!(factory);
 //!
 //! # fn main() -> Result<(), ModelError> {
 //! let model = Lag::new()?;
@@ -106,7 +110,7 @@
 //!
 //! # Packaging
 //!
-//! With the cdylib built, [`package::write_fmu`] zips `modelDescription.xml`, the library as
+//! With the cdylib built, [`fmi2::write_fmu`] (or [`fmi3::write_fmu`]) zips `modelDescription.xml`, the library as
 //! `binaries/<platform>/<modelIdentifier>.<ext>`, any resource files and an HTML page of the
 //! variables into the `.fmu`, written to a temporary file and renamed, so a failure leaves
 //! nothing behind. The factory reads `resources/` at instantiation: one binary can serve
@@ -121,16 +125,20 @@
 
 #![warn(missing_docs)]
 
-pub mod abi;
 pub mod codec;
 pub mod description;
+pub mod fmi2;
+pub mod fmi3;
 pub mod instance;
 pub mod model;
 #[cfg(feature = "package")]
 pub mod package;
+/// Pointer and string handling shared by the C APIs and their macros; not public API.
+#[doc(hidden)]
 pub mod raw;
 pub mod table;
 pub mod uri;
+mod xml;
 
 pub use description::{
     Causality, DefaultExperiment, DescriptionError, EnumerationItem, EnumerationType, Kind, ModelDescription, Unit, Variability, Variable,

@@ -1,5 +1,5 @@
 //! One FMU instance in safe Rust: the FMI 2.0 Co-Simulation state machine, argument checks,
-//! logging and FMU states. The C ABI ([`super::abi`]) only converts pointers and catches
+//! logging and FMU states. The C APIs ([`crate::fmi2::abi`], [`crate::fmi3::abi`]) only convert pointers and catch
 //! panics; every rule lives here.
 //!
 //! Refusals and failures:

@@ -2,7 +2,7 @@
 //! one, and the FMI 3.0 value references.
 //!
 //! FMI 3.0 wants value references unique over all variables, where FMI 2.0 numbers them per
-//! base type (and fmi2-export does). Here a variable's FMI 3.0 value reference is its position
+//! base type (and the FMI 2.0 layer does). Here a variable's FMI 3.0 value reference is its position
 //! in `ModelVariables` (time is 0), and [`Fmi3Variables`] maps it back to the base type and FMI
 //! 2.0 value reference the shared instance works with.
 //!
@@ -11,12 +11,10 @@
 //! scalars; the instantiation token is the FMI 2.0 GUID, so the twins of one model carry the same
 //! identity.
 
-use std::io::Cursor;
-
-use fmi2_export::description::{write_unit_definitions, BaseType, LOG_CATEGORIES};
-use fmi2_export::{Causality, Kind, ModelDescription};
-use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
-use quick_xml::Writer;
+use crate::description::BaseType;
+use crate::xml::{initial, Xml};
+use crate::{Causality, Kind, ModelDescription};
+use quick_xml::events::BytesStart;
 
 /// The FMI 3.0 type of a variable: the functions that read and set it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,68 +102,58 @@ impl Fmi3Variables {
 
 /// The FMI 3.0 `modelDescription.xml` of `d`.
 pub fn to_xml(d: &ModelDescription) -> String {
-    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
-    let ok = "writing XML to memory cannot fail";
     let token = d.guid();
-    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).expect(ok);
-    let root = BytesStart::new("fmiModelDescription").with_attributes([
+    let mut x = Xml::new();
+    x.start(BytesStart::new("fmiModelDescription").with_attributes([
         ("fmiVersion", "3.0"),
         ("modelName", d.model_name.as_str()),
         ("instantiationToken", token.as_str()),
         ("description", d.description.as_str()),
         ("generationTool", d.generation_tool.as_str()),
         ("variableNamingConvention", "flat"),
-    ]);
-    w.write_event(Event::Start(root)).expect(ok);
-    w.write_event(Event::Empty(BytesStart::new("CoSimulation").with_attributes([
+    ]));
+    x.empty(BytesStart::new("CoSimulation").with_attributes([
         ("modelIdentifier", d.model_identifier.as_str()),
         ("canGetAndSetFMUState", "true"),
         ("canSerializeFMUState", "true"),
         ("canHandleVariableCommunicationStepSize", if d.can_handle_variable_step { "true" } else { "false" }),
         ("hasEventMode", "false"),
-    ])))
-    .expect(ok);
+    ]));
+    x.unit_definitions(&d.units());
+    type_definitions(&mut x, d);
+    x.log_categories(|description| description.replace("fmi2", "fmi3"));
+    x.default_experiment(d.default_experiment.as_ref());
+    model_variables(&mut x, d);
+    model_structure(&mut x, d);
+    x.end("fmiModelDescription");
+    x.finish()
+}
 
-    write_unit_definitions(&mut w, &d.units());
-
+/// `TypeDefinitions`: an `EnumerationType` per enumeration type, none without.
+fn type_definitions(x: &mut Xml, d: &ModelDescription) {
     let enumerations = d.enumeration_types();
-    if !enumerations.is_empty() {
-        w.write_event(Event::Start(BytesStart::new("TypeDefinitions"))).expect(ok);
-        for t in enumerations {
-            w.write_event(Event::Start(BytesStart::new("EnumerationType").with_attributes([("name", t.name.as_str())]))).expect(ok);
-            for item in &t.items {
-                let value = item.value.to_string();
-                let e = BytesStart::new("Item").with_attributes([
-                    ("name", item.name.as_str()),
-                    ("value", value.as_str()),
-                    ("description", item.description.as_str()),
-                ]);
-                w.write_event(Event::Empty(e)).expect(ok);
-            }
-            w.write_event(Event::End(BytesEnd::new("EnumerationType"))).expect(ok);
+    if enumerations.is_empty() {
+        return;
+    }
+    x.start(BytesStart::new("TypeDefinitions"));
+    for t in enumerations {
+        x.start(BytesStart::new("EnumerationType").with_attributes([("name", t.name.as_str())]));
+        for item in &t.items {
+            let value = item.value.to_string();
+            x.empty(BytesStart::new("Item").with_attributes([
+                ("name", item.name.as_str()),
+                ("value", value.as_str()),
+                ("description", item.description.as_str()),
+            ]));
         }
-        w.write_event(Event::End(BytesEnd::new("TypeDefinitions"))).expect(ok);
+        x.end("EnumerationType");
     }
+    x.end("TypeDefinitions");
+}
 
-    w.write_event(Event::Start(BytesStart::new("LogCategories"))).expect(ok);
-    for c in LOG_CATEGORIES {
-        let description = c.description.replace("fmi2", "fmi3");
-        let e = BytesStart::new("Category").with_attributes([("name", c.name), ("description", description.as_str())]);
-        w.write_event(Event::Empty(e)).expect(ok);
-    }
-    w.write_event(Event::End(BytesEnd::new("LogCategories"))).expect(ok);
-
-    if let Some(de) = &d.default_experiment {
-        let (start, stop, step) = (de.start_time.to_string(), de.stop_time.to_string(), de.step_size.to_string());
-        w.write_event(Event::Empty(BytesStart::new("DefaultExperiment").with_attributes([
-            ("startTime", start.as_str()),
-            ("stopTime", stop.as_str()),
-            ("stepSize", step.as_str()),
-        ])))
-        .expect(ok);
-    }
-
-    w.write_event(Event::Start(BytesStart::new("ModelVariables"))).expect(ok);
+/// `ModelVariables`: an element of the variable's FMI 3.0 type per variable.
+fn model_variables(x: &mut Xml, d: &ModelDescription) {
+    x.start(BytesStart::new("ModelVariables"));
     for (index, v) in d.variables.iter().enumerate() {
         let vr = Fmi3Variables::value_reference(index).to_string();
         let kind = Fmi3Type::of(&v.kind);
@@ -179,37 +167,36 @@ pub fn to_xml(d: &ModelDescription) -> String {
         if let Kind::Enumeration { declared_type, .. } = &v.kind {
             e.push_attribute(("declaredType", declared_type.name.as_str()));
         }
-        match v.causality {
-            Causality::Parameter => e.push_attribute(("initial", "exact")),
-            Causality::Output | Causality::Local if v.is_exact() => e.push_attribute(("initial", "exact")),
-            Causality::Output => e.push_attribute(("initial", "calculated")),
-            _ => {}
+        if let Some(initial) = initial(v) {
+            e.push_attribute(("initial", initial));
         }
         if let Some(unit) = v.kind.unit() {
             e.push_attribute(("unit", unit.name));
         }
-        let start = v.kind.start_text();
-        match (&v.kind, start) {
+        match (&v.kind, v.kind.start_text()) {
             // A String's start value is a child element in FMI 3.0 (strings may be arrays).
             (Kind::String { .. }, Some(text)) => {
-                w.write_event(Event::Start(e)).expect(ok);
-                w.write_event(Event::Empty(BytesStart::new("Start").with_attributes([("value", text.as_str())]))).expect(ok);
-                w.write_event(Event::End(BytesEnd::new(kind.name()))).expect(ok);
+                x.start(e);
+                x.empty(BytesStart::new("Start").with_attributes([("value", text.as_str())]));
+                x.end(kind.name());
             }
             (_, start) => {
                 if let Some(start) = start {
                     e.push_attribute(("start", start.as_str()));
                 }
-                w.write_event(Event::Empty(e)).expect(ok);
+                x.empty(e);
             }
         }
     }
-    w.write_event(Event::End(BytesEnd::new("ModelVariables"))).expect(ok);
+    x.end("ModelVariables");
+}
 
-    // ModelStructure lists value references in FMI 3.0 (FMI 2.0: 1-based indices); the
-    // dependencies of an output are the inputs it depends on directly, none when empty.
-    w.write_event(Event::Start(BytesStart::new("ModelStructure"))).expect(ok);
-    let outputs: Vec<(usize, &fmi2_export::Variable)> =
+/// `ModelStructure` by value reference (FMI 2.0: 1-based indices): each output with the
+/// inputs it depends on directly (none when empty), then the outputs calculated in
+/// initialization.
+fn model_structure(x: &mut Xml, d: &ModelDescription) {
+    x.start(BytesStart::new("ModelStructure"));
+    let outputs: Vec<(usize, &crate::Variable)> =
         d.variables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).collect();
     for (index, v) in &outputs {
         let vr = Fmi3Variables::value_reference(*index).to_string();
@@ -220,17 +207,13 @@ pub fn to_xml(d: &ModelDescription) -> String {
             let kinds = vec!["dependent"; v.output_dependencies.len()].join(" ");
             e.push_attribute(("dependenciesKind", kinds.as_str()));
         }
-        w.write_event(Event::Empty(e)).expect(ok);
+        x.empty(e);
     }
     // Outputs without initial="exact" are computed in initialization mode (from parameters
     // and, with direct feedthrough, inputs): no dependencies attribute, "may depend on all".
     for (index, _) in outputs.iter().filter(|(_, v)| !v.is_exact()) {
         let vr = Fmi3Variables::value_reference(*index).to_string();
-        w.write_event(Event::Empty(BytesStart::new("InitialUnknown").with_attributes([("valueReference", vr.as_str())]))).expect(ok);
+        x.empty(BytesStart::new("InitialUnknown").with_attributes([("valueReference", vr.as_str())]));
     }
-    w.write_event(Event::End(BytesEnd::new("ModelStructure"))).expect(ok);
-    w.write_event(Event::End(BytesEnd::new("fmiModelDescription"))).expect(ok);
-    let mut text = String::from_utf8(w.into_inner().into_inner()).expect("XML is UTF-8");
-    text.push('\n');
-    text
+    x.end("ModelStructure");
 }

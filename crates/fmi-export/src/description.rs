@@ -3,7 +3,7 @@
 
 use std::io::Cursor;
 
-use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
+use quick_xml::events::{BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 
 /// FMI 2.0 causality of a variable.
@@ -68,7 +68,7 @@ impl Variability {
 /// of `modelDescription.xml` list exactly those.
 ///
 /// ```
-/// use fmi2_export::description::Unit;
+/// use neurarm_fmi_export::description::Unit;
 /// // N·m = kg·m²·s⁻²
 /// const NEWTON_METRE: Unit = Unit::new("N.m").kg(1).m(2).s(-2);
 /// assert_eq!(NEWTON_METRE.exponents(), [1, 2, -2, 0, 0, 0, 0, 0]);
@@ -465,7 +465,7 @@ impl ModelDescription {
             model_name: identifier.to_owned(),
             model_identifier: identifier.to_owned(),
             description: description.into(),
-            generation_tool: concat!("fmi2-export ", env!("CARGO_PKG_VERSION")).to_owned(),
+            generation_tool: concat!("neurarm-fmi-export ", env!("CARGO_PKG_VERSION")).to_owned(),
             default_experiment: None,
             variables,
             can_handle_variable_step: true,
@@ -510,14 +510,15 @@ impl ModelDescription {
     /// The GUID: a UUID (v5) of the model description with an empty GUID, so any change of
     /// the interface or of a start value gives a new one.
     pub fn guid(&self) -> String {
-        let xml = self.xml_with_guid("");
+        let xml = crate::fmi2::description::to_xml_with_guid(self, "");
+        // A fixed namespace: other bytes would change the GUID of every FMU.
         let namespace = uuid::Uuid::from_bytes(*b"fmi2-export.guid");
         format!("{{{}}}", uuid::Uuid::new_v5(&namespace, xml.as_bytes()))
     }
 
     /// `modelDescription.xml`.
     pub fn to_xml(&self) -> String {
-        self.xml_with_guid(&self.guid())
+        crate::fmi2::description::to_xml_with_guid(self, &self.guid())
     }
 
     /// The units the variables use, each once, in order of first use.
@@ -585,138 +586,6 @@ impl ModelDescription {
             }
         }
         Ok(())
-    }
-
-    fn xml_with_guid(&self, guid: &str) -> String {
-        let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
-        let ok = "writing XML to memory cannot fail";
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None))).expect(ok);
-        let root = BytesStart::new("fmiModelDescription").with_attributes([
-            ("fmiVersion", "2.0"),
-            ("modelName", self.model_name.as_str()),
-            ("guid", guid),
-            ("description", self.description.as_str()),
-            ("generationTool", self.generation_tool.as_str()),
-            ("variableNamingConvention", "flat"),
-            ("numberOfEventIndicators", "0"),
-        ]);
-        w.write_event(Event::Start(root)).expect(ok);
-        w.write_event(Event::Empty(BytesStart::new("CoSimulation").with_attributes([
-            ("modelIdentifier", self.model_identifier.as_str()),
-            ("canHandleVariableCommunicationStepSize", if self.can_handle_variable_step { "true" } else { "false" }),
-            ("canGetAndSetFMUstate", "true"),
-            ("canSerializeFMUstate", "true"),
-            ("canNotUseMemoryManagementFunctions", "true"),
-        ])))
-        .expect(ok);
-
-        write_unit_definitions(&mut w, &self.units());
-
-        let enumerations = self.enumeration_types();
-        if !enumerations.is_empty() {
-            w.write_event(Event::Start(BytesStart::new("TypeDefinitions"))).expect(ok);
-            for t in enumerations {
-                w.write_event(Event::Start(BytesStart::new("SimpleType").with_attributes([("name", t.name.as_str())]))).expect(ok);
-                w.write_event(Event::Start(BytesStart::new("Enumeration"))).expect(ok);
-                for item in &t.items {
-                    let value = item.value.to_string();
-                    let e = BytesStart::new("Item").with_attributes([
-                        ("name", item.name.as_str()),
-                        ("value", value.as_str()),
-                        ("description", item.description.as_str()),
-                    ]);
-                    w.write_event(Event::Empty(e)).expect(ok);
-                }
-                w.write_event(Event::End(BytesEnd::new("Enumeration"))).expect(ok);
-                w.write_event(Event::End(BytesEnd::new("SimpleType"))).expect(ok);
-            }
-            w.write_event(Event::End(BytesEnd::new("TypeDefinitions"))).expect(ok);
-        }
-
-        w.write_event(Event::Start(BytesStart::new("LogCategories"))).expect(ok);
-        for c in LOG_CATEGORIES {
-            let e = BytesStart::new("Category").with_attributes([("name", c.name), ("description", c.description)]);
-            w.write_event(Event::Empty(e)).expect(ok);
-        }
-        w.write_event(Event::End(BytesEnd::new("LogCategories"))).expect(ok);
-
-        if let Some(de) = &self.default_experiment {
-            let (start, stop, step) = (de.start_time.to_string(), de.stop_time.to_string(), de.step_size.to_string());
-            w.write_event(Event::Empty(BytesStart::new("DefaultExperiment").with_attributes([
-                ("startTime", start.as_str()),
-                ("stopTime", stop.as_str()),
-                ("stepSize", step.as_str()),
-            ])))
-            .expect(ok);
-        }
-
-        w.write_event(Event::Start(BytesStart::new("ModelVariables"))).expect(ok);
-        for v in &self.variables {
-            let vr = v.value_reference.to_string();
-            let mut sv = BytesStart::new("ScalarVariable").with_attributes([
-                ("name", v.name.as_str()),
-                ("valueReference", vr.as_str()),
-                ("description", v.description.as_str()),
-                ("causality", v.causality.name()),
-                ("variability", v.variability.name()),
-            ]);
-            match v.causality {
-                Causality::Parameter => sv.push_attribute(("initial", "exact")),
-                Causality::Output | Causality::Local if v.is_exact() => sv.push_attribute(("initial", "exact")),
-                Causality::Output => sv.push_attribute(("initial", "calculated")),
-                _ => {}
-            }
-            w.write_event(Event::Start(sv)).expect(ok);
-            let mut t = match &v.kind {
-                Kind::Enumeration { declared_type, .. } => {
-                    BytesStart::new("Enumeration").with_attributes([("declaredType", declared_type.name.as_str())])
-                }
-                _ => BytesStart::new(v.base_type().name()),
-            };
-            if let Some(unit) = v.kind.unit() {
-                t.push_attribute(("unit", unit.name));
-            }
-            if let Some(start) = v.kind.start_text() {
-                t.push_attribute(("start", start.as_str()));
-            }
-            w.write_event(Event::Empty(t)).expect(ok);
-            w.write_event(Event::End(BytesEnd::new("ScalarVariable"))).expect(ok);
-        }
-        w.write_event(Event::End(BytesEnd::new("ModelVariables"))).expect(ok);
-
-        // ModelStructure indices are 1-based positions in ModelVariables.
-        let outputs: Vec<(usize, &Variable)> =
-            self.variables.iter().enumerate().filter(|(_, v)| v.causality == Causality::Output).map(|(i, v)| (i + 1, v)).collect();
-        w.write_event(Event::Start(BytesStart::new("ModelStructure"))).expect(ok);
-        if !outputs.is_empty() {
-            w.write_event(Event::Start(BytesStart::new("Outputs"))).expect(ok);
-            for (index, v) in &outputs {
-                let deps = v.output_dependencies.iter().map(usize::to_string).collect::<Vec<_>>().join(" ");
-                let kinds = vec!["dependent"; v.output_dependencies.len()].join(" ");
-                let index = index.to_string();
-                let mut u = BytesStart::new("Unknown").with_attributes([("index", index.as_str()), ("dependencies", deps.as_str())]);
-                u.push_attribute(("dependenciesKind", kinds.as_str()));
-                w.write_event(Event::Empty(u)).expect(ok);
-            }
-            w.write_event(Event::End(BytesEnd::new("Outputs"))).expect(ok);
-        }
-        // Every output but those with initial="exact" is calculated during initialization
-        // from parameters (and, with direct feedthrough, inputs); no dependencies attribute
-        // means "may depend on all".
-        let calculated: Vec<usize> = outputs.iter().filter(|(_, v)| !v.is_exact()).map(|(i, _)| *i).collect();
-        if !calculated.is_empty() {
-            w.write_event(Event::Start(BytesStart::new("InitialUnknowns"))).expect(ok);
-            for index in &calculated {
-                let index = index.to_string();
-                w.write_event(Event::Empty(BytesStart::new("Unknown").with_attributes([("index", index.as_str())]))).expect(ok);
-            }
-            w.write_event(Event::End(BytesEnd::new("InitialUnknowns"))).expect(ok);
-        }
-        w.write_event(Event::End(BytesEnd::new("ModelStructure"))).expect(ok);
-        w.write_event(Event::End(BytesEnd::new("fmiModelDescription"))).expect(ok);
-        let mut text = String::from_utf8(w.into_inner().into_inner()).expect("XML is UTF-8");
-        text.push('\n');
-        text
     }
 }
 

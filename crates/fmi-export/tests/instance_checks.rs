@@ -6,9 +6,9 @@
 
 use std::sync::{Arc, Mutex};
 
-use fmi2_export::codec::{Put, Reader};
-use fmi2_export::instance::{Instance, InstantiateError, Status};
-use fmi2_export::{Model, ModelDescription, ModelError, RealVar, TableBuilder, Values};
+use neurarm_fmi_export::codec::{Put, Reader};
+use neurarm_fmi_export::instance::{Instance, InstantiateError, Status};
+use neurarm_fmi_export::{Model, ModelDescription, ModelError, RealVar, TableBuilder, Values};
 
 struct Scale {
     description: ModelDescription,

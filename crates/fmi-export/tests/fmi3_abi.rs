@@ -8,11 +8,11 @@
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::sync::Mutex;
 
-use fmi2_export::{
+use neurarm_fmi_export::fmi3::abi::{self, Fmi3Instance};
+use neurarm_fmi_export::fmi3::description::to_xml;
+use neurarm_fmi_export::{
     Causality, EnumerationType, Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Unit, Values, Variability,
 };
-use fmi3_export::abi::{self, Fmi3Instance};
-use fmi3_export::description::to_xml;
 
 struct Gain {
     description: ModelDescription,

@@ -176,24 +176,6 @@ pub fn select_binaries(
     Ok(found)
 }
 
-/// Writes `path` as a `.fmu` with each `(platform, binary)` of `binaries` as
-/// `binaries/<platform>/<identifier>.<ext>` (each checked with [`check_binary`]) and
-/// `resources` as `(name, content)` pairs under `resources/`; `equations_html` goes into the
-/// documentation beside the table of variables. Nothing is left at `path` on failure.
-pub fn write_fmu(
-    path: &Path,
-    description: &ModelDescription,
-    binaries: &[(&str, &Path)],
-    resources: &[(&str, Vec<u8>)],
-    equations_html: &str,
-) -> std::io::Result<()> {
-    let libraries = read_binaries(binaries)?
-        .into_iter()
-        .map(|(platform, extension, bytes)| (format!("binaries/{platform}/{}.{extension}", description.model_identifier), bytes))
-        .collect::<Vec<_>>();
-    write_archive(path, &description.to_xml(), &libraries, resources, &documentation_html(description, equations_html))
-}
-
 /// Reads each `(platform, binary)` of `binaries` (FMI 2.0 platform names) and checks it with
 /// [`check_binary`]: `(platform, library extension, bytes)` in order, or an
 /// [`std::io::ErrorKind::InvalidInput`] error naming the file for an empty list, a platform
@@ -220,7 +202,7 @@ pub fn read_binaries<'a>(binaries: &[(&'a str, &Path)]) -> std::io::Result<Vec<(
 /// Writes an FMU archive to `path`: `model_description` as `modelDescription.xml`, each
 /// `(entry name, bytes)` of `libraries` (executable), each resource under `resources/` and
 /// `documentation` as `documentation/index.html`. Nothing is checked here (that is
-/// [`write_fmu`]'s part, or another FMI version's packager's). The archive is written to a
+/// [`crate::fmi2::write_fmu`]'s or [`crate::fmi3::write_fmu`]'s part). The archive is written to a
 /// temporary file beside `path` and renamed, so a failure leaves nothing behind.
 pub fn write_archive(
     path: &Path,
@@ -237,7 +219,7 @@ pub fn write_archive(
     // Readable by all (0644 less the umask), as a plain file would be, not a temporary 0600.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
-    let tmp = builder.prefix(".fmi2-export-").suffix(".fmu.tmp").tempfile_in(dir)?;
+    let tmp = builder.prefix(".fmi-export-").suffix(".fmu.tmp").tempfile_in(dir)?;
     let mut zip = zip::ZipWriter::new(tmp.reopen()?);
     let options = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     let exe_options = options.unix_permissions(0o755);

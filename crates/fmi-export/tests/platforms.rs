@@ -4,8 +4,9 @@
 
 use std::path::Path;
 
-use fmi2_export::package::{check_binary, library_file_name, select_binaries, write_fmu, PLATFORM};
-use fmi2_export::{ModelDescription, TableBuilder};
+use neurarm_fmi_export::fmi2::write_fmu;
+use neurarm_fmi_export::package::{check_binary, library_file_name, select_binaries, PLATFORM};
+use neurarm_fmi_export::{ModelDescription, TableBuilder};
 
 /// This test program: an x86_64 (or whatever this machine is) ELF on Linux.
 fn this_program() -> Vec<u8> {

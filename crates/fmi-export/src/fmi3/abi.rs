@@ -1,4 +1,4 @@
-//! The FMI 3.0 Co-Simulation C API over fmi2-export's [`Instance`]: pointer checks, value
+//! The FMI 3.0 Co-Simulation C API over the shared [`Instance`]: pointer checks, value
 //! reference translation ([`Fmi3Variables`]), string conversion, and a `catch_unwind` around
 //! every entry point so no panic crosses into the host. The [`export_fmi3!`](crate::export_fmi3)
 //! macro emits the `extern "C"` symbols and calls these.
@@ -14,16 +14,16 @@
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::PathBuf;
 
-use fmi2_export::instance::{Api, Function, Instance, LogSink, Status};
-use fmi2_export::raw::{self, catch_panic, slice, slice_mut, str_arg};
-use fmi2_export::ModelFactory;
+use crate::instance::{Api, Function, Instance, LogSink, Status};
+use crate::raw::{self, catch_panic, slice, slice_mut, str_arg};
+use crate::ModelFactory;
 
-use crate::description::{Fmi3Type, Fmi3Variables};
+use super::description::{Fmi3Type, Fmi3Variables};
 
 /// `fmi3Instance`.
 pub type Fmi3Instance = *mut c_void;
 /// `fmi3FMUState`.
-pub use fmi2_export::raw::FmuState;
+pub use crate::raw::FmuState;
 /// `fmi3Status` as the C API returns it (the values of [`Status`], without `Pending`).
 pub type RawStatus = c_int;
 /// `fmi3LogMessageCallback`: not variadic in FMI 3.0, the message is plain text.
@@ -570,7 +570,7 @@ pub const NO_EVENT_MODE: &str = "this FMU has no event mode and no clocks (hasEv
 pub const CO_SIMULATION_ONLY: &str = "this FMU supports only Co-Simulation";
 
 /// Emits every `fmi3*` function of the FMI 3.0 C API as an `extern "C"` symbol serving the
-/// models `factory` makes (a [`ModelFactory`](fmi2_export::ModelFactory)): Co-Simulation
+/// models `factory` makes (a [`ModelFactory`](crate::ModelFactory)): Co-Simulation
 /// through the shared instance; the functions of the other interfaces log why they are not
 /// offered and return `fmi3Error` (or NULL). A library may also carry `export_fmi2!`'s symbols:
 /// the names do not clash, so one binary can serve an FMU's FMI 2.0 and FMI 3.0 twins.
@@ -578,13 +578,13 @@ pub const CO_SIMULATION_ONLY: &str = "this FMU supports only Co-Simulation";
 macro_rules! export_fmi3 {
     ($factory:path) => {
         #[doc(hidden)]
-        const __FMI3_EXPORT_FACTORY: $crate::fmi2_export::ModelFactory = $factory;
+        const __FMI3_EXPORT_FACTORY: $crate::ModelFactory = $factory;
 
         #[doc(hidden)]
         #[allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
         mod fmi3_exports {
             use std::ffi::{c_char, c_int, c_void};
-            use $crate::abi::{self, Fmi3Instance, FmuState, LogMessage, RawStatus, CO_SIMULATION_ONLY, NO_EVENT_MODE};
+            use $crate::fmi3::abi::{self, Fmi3Instance, FmuState, LogMessage, RawStatus, CO_SIMULATION_ONLY, NO_EVENT_MODE};
 
             #[no_mangle]
             pub extern "C" fn fmi3GetVersion() -> *const c_char {

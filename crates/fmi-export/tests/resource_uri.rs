@@ -2,7 +2,7 @@
 //! Unix and on Windows (both checked on any machine: the conversion takes the platform as an
 //! argument), including the forms Windows hosts send.
 
-use fmi2_export::uri::{resource_path, PathStyle};
+use neurarm_fmi_export::uri::{resource_path, PathStyle};
 
 /// (URI, Unix folder or `Err`, Windows folder or `Err`); `Err` stands for any error. On Unix a
 /// drive-letter URI names the folder its path spells (`/C:/x` is a legal Unix path): only the

@@ -496,7 +496,7 @@ macro_rules! export_fmi2 {
         #[doc(hidden)]
         mod fmi2_exports {
             use std::ffi::{c_char, c_int};
-            use $crate::abi::{self, CallbackFunctions, Component, FmuState, RawStatus};
+            use $crate::fmi2::abi::{self, CallbackFunctions, Component, FmuState, RawStatus};
             use $crate::instance::Function;
 
             #[no_mangle]

@@ -2,7 +2,7 @@
 //! platform folders (`x86_64-linux`, `x86_64-windows`, `x86_64-darwin`, `aarch64-darwin`,
 //! `aarch64-linux`, …), resources and documentation.
 //!
-//! The binaries are given under their FMI 2.0 platform names, as fmi2-export builds and
+//! The binaries are given under their FMI 2.0 platform names, as the FMI 2.0 packager builds and
 //! checks them (`linux64`, `win64`, `darwin64`, `aarch64-linux`): one library that carries
 //! both the `fmi2*` and the `fmi3*` functions serves both twins. A universal macOS library
 //! (`darwin64`, x86_64 + arm64) goes into both `x86_64-darwin` and `aarch64-darwin`, each
@@ -10,8 +10,8 @@
 
 use std::path::Path;
 
-use fmi2_export::package::{documentation_page, macho_architectures, read_binaries, write_archive};
-use fmi2_export::ModelDescription;
+use crate::package::{documentation_page, macho_architectures, read_binaries, write_archive};
+use crate::ModelDescription;
 
 /// The FMI 3.0 platform folders (section 2.5.1.2) of a library built for the FMI 2.0 platform
 /// `platform`, given its bytes (a macOS library holds one or two architectures).
@@ -37,7 +37,7 @@ pub fn platform_folders(platform: &str, bytes: &[u8]) -> Result<Vec<&'static str
 }
 
 /// Writes the FMI 3.0 twin of a model to `path`: like
-/// [`fmi2_export::package::write_fmu`] (the same binaries, checked the same way, the same
+/// [`crate::fmi2::write_fmu`] (the same binaries, checked the same way, the same
 /// resources), with the FMI 3.0 model description and platform folders, and the library named
 /// `<modelIdentifier>.<ext>` (FMI 3.0 has no `lib` prefix). Nothing is left at `path` on
 /// failure.
@@ -57,5 +57,5 @@ pub fn write_fmu(
         }
     }
     let html = documentation_page(description, equations_html, "FMI 3.0 Co-Simulation; instantiation token");
-    write_archive(path, &crate::description::to_xml(description), &libraries, resources, &html)
+    write_archive(path, &super::description::to_xml(description), &libraries, resources, &html)
 }

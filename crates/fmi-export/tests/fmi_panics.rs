@@ -6,8 +6,8 @@ use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::Path;
 use std::sync::Mutex;
 
-use fmi2_export::abi::{self, CallbackFunctions, Logger};
-use fmi2_export::{DefaultExperiment, Model, ModelDescription, ModelError, TableBuilder, Values};
+use neurarm_fmi_export::fmi2::abi::{self, CallbackFunctions, Logger};
+use neurarm_fmi_export::{DefaultExperiment, Model, ModelDescription, ModelError, TableBuilder, Values};
 
 struct Bomb(ModelDescription);
 
