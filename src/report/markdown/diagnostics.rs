@@ -1,6 +1,5 @@
-//! What the diagnostic loops tell about Table 1: how far NN/perfect can be read (the true law
-//! scaled slightly), what the sensors cost on the real arm, which loops failed, and whether the
-//! arm has little friction.
+//! What the diagnostic loops tell about Table 1: how far NN/perfect can be read, what the
+//! sensors cost on the real arm, which loops failed, and whether the arm has little friction.
 
 use std::fmt::Write as _;
 

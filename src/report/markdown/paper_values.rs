@@ -1,5 +1,5 @@
-//! Reading the paper's values: its MSEs are about 10⁴ × ours; the same errors in cm² and
-//! summed over the samples instead of averaged, beside the paper's.
+//! Reading the paper's values: its MSEs over ours per case, and this run's errors in cm² and
+//! summed over the samples, the two readings that fit, beside the paper's.
 
 use std::fmt::Write as _;
 
