@@ -404,7 +404,7 @@ pub fn run_paper(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnM
         .tempdir_in(&parent)
         .map_err(|e| format!("cannot create a staging folder in {}: {e}", parent.display()))?;
     let run = compute(staging.path(), arms, settings, log)?;
-    crate::report::write_report(staging.path(), &run)?;
+    crate::report::write_report(staging.path(), &run).map_err(|e| format!("{e:#}"))?;
     let staged = staging.keep();
     let finish = || -> Result<(), String> {
         if out.exists() {

@@ -1,8 +1,11 @@
 //! The run's figures: friction pairs, nets and true laws (the paper's Figs. 6/7), tracking
-//! (Figs. 9/10), the gravity net's error over random poses, and the joint-space runs
-//! (Figs. 11/13/14). Each case keeps its colour in every panel (see `plot`).
+//! (Figs. 9/10), the gravity net's error over random poses, the joint-space runs
+//! (Figs. 11/13/14), the gravity study and online adaptation, one function per figure. Each
+//! case keeps its colour in every panel (see `plot`).
 
 use std::path::Path;
+
+use anyhow::Context as _;
 
 use super::plot::{write_png, Panel, Series, Style};
 use crate::experiments::gravity_study::GravityStudy;
@@ -13,17 +16,50 @@ use neurarm_physics::nn::InputEncoding;
 /// Most points of a scatter series: more only slows the PNG down.
 const MAX_SCATTER: usize = 2000;
 
-/// Writes `friction.png`, `tracking.png`, `gravity.png` and `gravity_compensation.png`.
-pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
+/// Writes `friction.png`, `tracking.png`, `gravity.png`, `gravity_compensation.png`,
+/// `adaptation.png` and, if the run made the study, `gravity_study.png`.
+pub fn write_figures(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
+    write_friction_figure(out, run)?;
+    write_tracking_figure(out, run)?;
+    write_gravity_figure(out, run)?;
+    if let Some(study) = &run.results.gravity.study {
+        write_study_figure(out, study)?;
+    }
+    write_gravity_compensation_figure(out, run)?;
+    write_adaptation_figure(out, run)
+}
+
+/// Panels side by side in a figure with one panel per joint.
+fn joint_columns(run: &PaperRun) -> usize {
+    run.arms.joints().min(4)
+}
+
+/// Column `b` of `r` against its column `a` (empty where either is missing).
+fn xy(r: &LoopRun, a: &str, b: &str) -> Vec<(f64, f64)> {
+    r.column(a).unwrap_or_default().into_iter().zip(r.column(b).unwrap_or_default()).collect()
+}
+
+/// The distance of the true end-effector position from the reference [mm] against time [s].
+fn error_mm(r: &LoopRun) -> Vec<(f64, f64)> {
+    let c = |name: &str| r.column(name).unwrap_or_default();
+    let (t, xr, yr, x, y) = (c("time"), c("ctl.x_ref"), c("ctl.y_ref"), c("arm.x"), c("arm.y"));
+    (0..t.len().min(x.len())).map(|k| (t[k], 1e3 * (xr[k] - x[k]).hypot(yr[k] - y[k]))).collect()
+}
+
+/// `friction.png`: per arm and joint the identified pairs, the true law and the trained net
+/// (the paper's Figs. 6/7).
+fn write_friction_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
     let n = run.arms.joints();
-    let columns = n.min(4);
     let top = run.results.settings.max_velocity;
 
     let mut panels = Vec::new();
     for (k, tag) in ["simulated", real_label(run)].iter().enumerate() {
         let arm = if k == 0 { &run.arms.nominal.arm } else { &run.arms.real.arm };
         for j in 0..n {
-            let net = run.friction_nets[k * n + j].network()?;
+            let net = run.friction_nets[k * n + j]
+                .network()
+                .map_err(anyhow::Error::msg)
+                .with_context(|| format!("the friction net of joint {} ({tag})", j + 1))?;
             let speeds: Vec<f64> = (-1000..=1000).map(|i| i as f64 * top / 1000.0).collect();
             let law = arm.friction[j];
             panels.push(Panel {
@@ -47,17 +83,14 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
             });
         }
     }
-    write_png(&out.join("friction.png"), "Friction: identified pairs, true law and trained net per joint", &panels, columns)?;
+    write_png(&out.join("friction.png"), "Friction: identified pairs, true law and trained net per joint", &panels, joint_columns(run))?;
+    Ok(())
+}
 
+/// `tracking.png`: the end-effector paths and tracking errors of the five task-space loops
+/// (Figs. 9/10).
+fn write_tracking_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
     let loops = &run.loops;
-    let xy = |r: &LoopRun, a: &str, b: &str| -> Vec<(f64, f64)> {
-        r.column(a).unwrap_or_default().into_iter().zip(r.column(b).unwrap_or_default()).collect()
-    };
-    let error_mm = |r: &LoopRun| -> Vec<(f64, f64)> {
-        let c = |name: &str| r.column(name).unwrap_or_default();
-        let (t, xr, yr, x, y) = (c("time"), c("ctl.x_ref"), c("ctl.y_ref"), c("arm.x"), c("arm.y"));
-        (0..t.len().min(x.len())).map(|k| (t[k], 1e3 * (xr[k] - x[k]).hypot(yr[k] - y[k]))).collect()
-    };
     let real = real_label(run);
     let names = ["sim, perfect".to_owned(), "sim, NN".into(), "sim, none".into(), format!("{real}, NN"), format!("{real}, none")];
     let panels = vec![
@@ -81,7 +114,12 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
         },
     ];
     write_png(&out.join("tracking.png"), "Task-space tracking with friction compensation (Table 1)", &panels, 1)?;
+    Ok(())
+}
 
+/// `gravity.png`: the gravity net's error against the true torque per joint, on random poses.
+fn write_gravity_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
+    let n = run.arms.joints();
     let samples = &run.results.gravity.net.samples;
     let panels: Vec<Panel> = (0..n)
         .map(|j| {
@@ -99,12 +137,20 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
         })
         .collect();
     let poses = run.results.gravity.net.poses;
-    write_png(&out.join("gravity.png"), &format!("Gravity net error on {poses} random poses (base turned 90°)"), &panels, columns)?;
+    write_png(
+        &out.join("gravity.png"),
+        &format!("Gravity net error on {poses} random poses (base turned 90°)"),
+        &panels,
+        joint_columns(run),
+    )?;
+    Ok(())
+}
 
-    if let Some(study) = &run.results.gravity.study {
-        write_study_figure(out, study)?;
-    }
-
+/// `gravity_compensation.png`: each joint's angle against its target in the joint-space loop,
+/// per compensator (Figs. 11/13/14).
+fn write_gravity_compensation_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
+    let n = run.arms.joints();
+    let loops = &run.loops;
     let mut panels = Vec::new();
     for j in 1..=n {
         let t = loops[5].column("time").unwrap_or_default();
@@ -120,12 +166,12 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
         panels.push(Panel { title: format!("joint {j}"), x_label: "t [s]".into(), y_label: "q [rad]".into(), series });
     }
     write_png(&out.join("gravity_compensation.png"), "Joint-space P control with gravity compensation", &panels, 2)?;
-    write_adaptation_figure(out, run)
+    Ok(())
 }
 
 /// `adaptation.png`: windowed tracking MSE over time of the friction-drift, payload and steady
 /// runs per compensator, and how far the adaptive nets moved.
-fn write_adaptation_figure(out: &Path, run: &PaperRun) -> Result<(), String> {
+fn write_adaptation_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
     use crate::experiments::adaptation::{settled_error_per_segment, windowed_joint_mse, windowed_tracking_mse, CASES};
     let loops = &run.adaptation_loops;
     let a = &run.results.settings.adaptation;
@@ -178,12 +224,13 @@ fn write_adaptation_figure(out: &Path, run: &PaperRun) -> Result<(), String> {
             ],
         },
     ];
-    write_png(&out.join("adaptation.png"), "Online adaptation (real arm)", &panels, 2)
+    write_png(&out.join("adaptation.png"), "Online adaptation (real arm)", &panels, 2)?;
+    Ok(())
 }
 
 /// `gravity_study.png`: the worst joint's whole-turn RMS error and largest error against the
 /// poses measured, per design and encoding, both axes in decades.
-fn write_study_figure(out: &Path, study: &GravityStudy) -> Result<(), String> {
+fn write_study_figure(out: &Path, study: &GravityStudy) -> anyhow::Result<()> {
     let series_of = |largest: bool| -> Vec<Series> {
         let mut series = Vec::new();
         for encoding in [InputEncoding::LinkAngles, InputEncoding::JointAngles, InputEncoding::Raw] {
@@ -214,7 +261,8 @@ fn write_study_figure(out: &Path, study: &GravityStudy) -> Result<(), String> {
         &format!("Gravity net error over the whole turn against the poses measured ({} joints)", study.joints),
         &panels,
         2,
-    )
+    )?;
+    Ok(())
 }
 
 /// How the report names the real arm: "emulated real" or "real (given)".

@@ -4,18 +4,117 @@
 //!
 //! Text is rasterised by `plotters`' `ab_glyph` backend from a TrueType file read at run time
 //! (DejaVu Sans, Debian package `fonts-dejavu-core`), so no system font service is involved.
-//! Every failure, a missing font included, is returned as `Err(String)` naming the output
+//! Every failure, a missing font included, is returned as a [`PlotError`] naming the output
 //! file; nothing here panics on odd data (empty series, one point, constant values, NaN).
 
+use std::io;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle};
+
+/// A failed drawing call of plotters' bitmap backend.
+pub type DrawError = DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>;
+
+/// Why a figure was not written. Every variant names the figure's file (`path`).
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// No panels were given.
+    #[error("{}: no panels to plot", .path.display())]
+    NoPanels {
+        /// The figure's file.
+        path: PathBuf,
+    },
+    /// More rows of panels than a figure may have.
+    #[error("{}: {rows} rows of panels is more than the {MAX_ROWS} a figure may have", .path.display())]
+    TooManyRows {
+        /// The figure's file.
+        path: PathBuf,
+        /// Rows the panels would fill.
+        rows: usize,
+    },
+    /// No usable font for the text.
+    #[error("{}: no font for the text", .path.display())]
+    Font {
+        /// The figure's file.
+        path: PathBuf,
+        /// Why the font could not be used (kept from the first figure of the process).
+        source: Arc<FontError>,
+    },
+    /// The figure's folder is missing or not a folder.
+    #[error("{}: folder {} {problem}", .path.display(), .folder.display())]
+    Folder {
+        /// The figure's file.
+        path: PathBuf,
+        /// Its folder.
+        folder: PathBuf,
+        /// "does not exist" or "is not a folder".
+        problem: &'static str,
+    },
+    /// The temporary file to draw into could not be created.
+    #[error("{}: cannot create a temporary file in {}", .path.display(), .folder.display())]
+    TempFile {
+        /// The figure's file.
+        path: PathBuf,
+        /// Its folder, where the temporary file goes.
+        folder: PathBuf,
+        /// The file system's error.
+        source: io::Error,
+    },
+    /// A drawing call failed.
+    #[error("{}: drawing {place} failed", .path.display())]
+    Draw {
+        /// The figure's file.
+        path: PathBuf,
+        /// What was drawn: "the title", "panel \"…\"", ….
+        place: String,
+        /// plotters' error.
+        source: DrawError,
+    },
+    /// plotters panicked while drawing.
+    #[error("{}: plotting failed: {message}", .path.display())]
+    Panicked {
+        /// The figure's file.
+        path: PathBuf,
+        /// The panic's message.
+        message: String,
+    },
+    /// The drawn figure could not be saved under its name.
+    #[error("{}: cannot save the figure", .path.display())]
+    Save {
+        /// The figure's file.
+        path: PathBuf,
+        /// The file system's error.
+        source: io::Error,
+    },
+}
+
+/// Why the text font could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum FontError {
+    /// None of the places a font may be held a readable file.
+    #[error("no font for plot text ({}); install the Debian package fonts-dejavu-core", tried_text(.tried))]
+    Missing {
+        /// Each place tried and why it could not be read.
+        tried: Vec<(PathBuf, io::Error)>,
+    },
+    /// The file is no TrueType font plotters can use.
+    #[error("font {} is not a usable TrueType font", .path.display())]
+    Unusable {
+        /// The font file.
+        path: PathBuf,
+    },
+}
+
+/// The places tried for a font and their errors, for [`FontError::Missing`].
+fn tried_text(tried: &[(PathBuf, io::Error)]) -> String {
+    tried.iter().map(|(path, e)| format!("{}: {e}", path.display())).collect::<Vec<_>>().join("; ")
+}
 
 /// How a series is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,19 +204,19 @@ const PALETTE: [RGBColor; 10] = [
 /// `path`'s extension, and is written atomically: rendered to a temporary file in the same folder,
 /// then renamed over `path`, so a failure leaves no partial file.
 ///
-/// Errors (as text naming `path`): no panels, more than 50 rows, the folder missing or not
+/// Errors, each naming `path`: no panels, more than 50 rows, the folder missing or not
 /// writable, no usable font (install Debian's `fonts-dejavu-core`), or a drawing failure.
-pub fn write_png(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<(), String> {
-    let fail = |what: String| format!("{}: {what}", path.display());
+pub fn write_png(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<(), PlotError> {
+    let named = || path.to_path_buf();
     if panels.is_empty() {
-        return Err(fail("no panels to plot".into()));
+        return Err(PlotError::NoPanels { path: named() });
     }
     let columns = columns.clamp(1, panels.len());
     let rows = panels.len().div_ceil(columns);
     if rows > MAX_ROWS {
-        return Err(fail(format!("{rows} rows of panels is more than the {MAX_ROWS} a figure may have")));
+        return Err(PlotError::TooManyRows { path: named(), rows });
     }
-    ensure_font().map_err(&fail)?;
+    ensure_font().map_err(|source| PlotError::Font { path: named(), source })?;
 
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
@@ -125,23 +224,23 @@ pub fn write_png(path: &Path, title: &str, panels: &[Panel], columns: usize) -> 
     };
     if !dir.is_dir() {
         let problem = if dir.exists() { "is not a folder" } else { "does not exist" };
-        return Err(fail(format!("folder {} {problem}", dir.display())));
+        return Err(PlotError::Folder { path: named(), folder: dir.to_path_buf(), problem });
     }
     // The suffix matters: the bitmap backend picks the image format from the extension.
     let tmp = crate::table::readable_temp_file()
         .prefix(".neurarm-")
         .suffix(".png")
         .tempfile_in(dir)
-        .map_err(|e| fail(format!("cannot create a temporary file in {}: {e}", dir.display())))?;
+        .map_err(|source| PlotError::TempFile { path: named(), folder: dir.to_path_buf(), source })?;
 
     // plotters has internal unwraps; keep a surprise there from taking the caller down.
     let rendered = catch_unwind(AssertUnwindSafe(|| render(tmp.path(), title, panels, columns, rows)));
     match rendered {
-        Ok(result) => result.map_err(&fail)?,
-        Err(payload) => return Err(fail(format!("plotting failed: {}", panic_text(payload.as_ref())))),
+        Ok(result) => result.map_err(|DrawFailure { place, source }| PlotError::Draw { path: named(), place, source })?,
+        Err(payload) => return Err(PlotError::Panicked { path: named(), message: panic_text(payload.as_ref()) }),
     }
-    tmp.as_file().sync_all().map_err(|e| fail(e.to_string()))?;
-    tmp.persist(path).map_err(|e| fail(e.error.to_string()))?;
+    tmp.as_file().sync_all().map_err(|source| PlotError::Save { path: named(), source })?;
+    tmp.persist(path).map_err(|e| PlotError::Save { path: named(), source: e.error })?;
     Ok(())
 }
 
@@ -184,38 +283,51 @@ fn legend_lines(entries: &[Entry]) -> usize {
 /// Height of one legend line, pixels.
 const LEGEND_LINE: u32 = 24;
 
+/// A drawing call that failed in [`render`], and the part of the figure it drew.
+struct DrawFailure {
+    /// "the title", "panel \"…\"", ….
+    place: String,
+    /// plotters' error.
+    source: DrawError,
+}
+
+/// Wraps a drawing error of `place` for [`render`].
+fn drawing(place: impl Into<String>) -> impl FnOnce(DrawError) -> DrawFailure {
+    move |source| DrawFailure { place: place.into(), source }
+}
+
 /// Draws the whole figure into `file` (a `.png` path).
-fn render(file: &Path, title: &str, panels: &[Panel], columns: usize, rows: usize) -> Result<(), String> {
+fn render(file: &Path, title: &str, panels: &[Panel], columns: usize, rows: usize) -> Result<(), DrawFailure> {
     let entries = legend_entries(panels);
     let title_height = if title.trim().is_empty() { 0 } else { TITLE_HEIGHT };
     let legend_height = LEGEND_LINE * legend_lines(&entries) as u32 + if entries.is_empty() { 0 } else { 8 };
     let height = title_height + legend_height + ROW_HEIGHT * rows as u32;
     let root = BitMapBackend::new(file, (WIDTH, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(text)?;
+    root.fill(&WHITE).map_err(drawing("the background"))?;
     let body = if title_height > 0 {
         let (band, rest) = root.split_vertically(title_height);
         let style = TextStyle::from((FAMILY, 24, FontStyle::Bold)).pos(Pos::new(HPos::Center, VPos::Center));
-        band.draw_text(title.trim(), &style, (WIDTH as i32 / 2, title_height as i32 / 2)).map_err(text)?;
+        band.draw_text(title.trim(), &style, (WIDTH as i32 / 2, title_height as i32 / 2)).map_err(drawing("the title"))?;
         rest
     } else {
         root.clone()
     };
     let body = if legend_height > 0 {
         let (band, rest) = body.split_vertically(legend_height);
-        draw_legend(&band, &entries)?;
+        draw_legend(&band, &entries).map_err(drawing("the legend"))?;
         rest
     } else {
         body
     };
     for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
-        draw_panel(&area, panel, &entries).map_err(|e| format!("panel \"{}\": {e}", panel.title))?;
+        draw_panel(&area, panel, &entries).map_err(drawing(format!("panel \"{}\"", panel.title)))?;
     }
-    root.present().map_err(text)?;
+    root.present().map_err(drawing("the bitmap into its file"))?;
     Ok(())
 }
 
 /// Draws the legend entries into `band`, flowing over lines.
-fn draw_legend(band: &DrawingArea<BitMapBackend<'_>, Shift>, entries: &[Entry]) -> Result<(), String> {
+fn draw_legend(band: &DrawingArea<BitMapBackend<'_>, Shift>, entries: &[Entry]) -> Result<(), DrawError> {
     let style = TextStyle::from((FAMILY, 13)).pos(Pos::new(HPos::Left, VPos::Center));
     let (mut x, mut y) = (10, LEGEND_LINE as i32 / 2 + 2);
     for e in entries {
@@ -224,15 +336,15 @@ fn draw_legend(band: &DrawingArea<BitMapBackend<'_>, Shift>, entries: &[Entry]) 
             y += LEGEND_LINE as i32;
         }
         let colour = PALETTE[e.colour % PALETTE.len()];
-        band.draw(&legend_mark(e.style, (x, y), colour.stroke_width(2), colour.filled())).map_err(text)?;
-        band.draw_text(&e.name, &style, (x + 28, y)).map_err(text)?;
+        band.draw(&legend_mark(e.style, (x, y), colour.stroke_width(2), colour.filled()))?;
+        band.draw_text(&e.name, &style, (x + 28, y))?;
         x += entry_width(e);
     }
     Ok(())
 }
 
 /// Draws one panel (axes, mesh, series) into `area`; colours from the figure's `legend`.
-fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel, legend: &[Entry]) -> Result<(), String> {
+fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel, legend: &[Entry]) -> Result<(), DrawError> {
     let runs: Vec<Vec<Vec<(f64, f64)>>> = panel.series.iter().map(|s| plottable_runs(&s.points)).collect();
     let all = || runs.iter().flatten().flatten();
     let (x0, x1) = axis_range(all().map(|p| p.0));
@@ -243,8 +355,7 @@ fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel, legen
         .margin(10)
         .x_label_area_size(44)
         .y_label_area_size(70)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(text)?;
+        .build_cartesian_2d(x0..x1, y0..y1)?;
     let x_ticks = tick_format(x0, x1);
     let y_ticks = tick_format(y0, y1);
     chart
@@ -259,8 +370,7 @@ fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel, legen
         .axis_desc_style((FAMILY, 15))
         .bold_line_style(RGBColor(215, 215, 215))
         .light_line_style(RGBColor(242, 242, 242))
-        .draw()
-        .map_err(text)?;
+        .draw()?;
 
     for (i, (series, runs)) in panel.series.iter().zip(&runs).enumerate() {
         let index = legend.iter().find(|e| !series.name.is_empty() && e.name == series.name).map_or(legend.len() + i, |e| e.colour);
@@ -271,12 +381,11 @@ fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel, legen
             Style::Line => chart.draw_series(runs.iter().map(|run| PathElement::new(run.clone(), line))),
             Style::Dashed => chart.draw_series(runs.iter().map(|run| DashedPathElement::new(run.clone(), 8, 5, line))),
             Style::Points => chart.draw_series(runs.iter().flatten().map(|&p| Circle::new(p, 2, dot))),
-        }
-        .map_err(text)?;
+        }?;
         // A run of one point draws no line: mark it so it is not lost.
         if series.style != Style::Points {
             let lone = runs.iter().filter(|run| run.len() == 1).map(|run| Circle::new(run[0], 3, dot));
-            chart.draw_series(lone).map_err(text)?;
+            chart.draw_series(lone)?;
         }
     }
     Ok(())
@@ -366,11 +475,6 @@ fn trim_zeros(text: &str) -> &str {
     }
 }
 
-/// Text of a `Display` error.
-fn text(e: impl std::fmt::Display) -> String {
-    e.to_string()
-}
-
 /// Text of a panic payload.
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
@@ -384,13 +488,12 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// Registers the text font with plotters once per process. The outcome, failure included, is
 /// kept: the font file is read (and its bytes leaked, as plotters needs them `'static`) once.
-fn ensure_font() -> Result<(), String> {
-    static OUTCOME: OnceLock<Result<(), String>> = OnceLock::new();
+fn ensure_font() -> Result<(), Arc<FontError>> {
+    static OUTCOME: OnceLock<Result<(), Arc<FontError>>> = OnceLock::new();
     OUTCOME
         .get_or_init(|| {
             let (path, bytes) = read_font(&REGULAR_FONTS.map(Path::new))?;
-            register_font(FAMILY, FontStyle::Normal, bytes)
-                .map_err(|_| format!("font {} is not a usable TrueType font", path.display()))?;
+            register_font(FAMILY, FontStyle::Normal, bytes).map_err(|_| FontError::Unusable { path })?;
             // Bold is a nicety: without it plotters falls back to the regular face.
             if let Ok((_, bold)) = read_font(&BOLD_FONTS.map(Path::new)) {
                 let _ = register_font(FAMILY, FontStyle::Bold, bold);
@@ -401,15 +504,15 @@ fn ensure_font() -> Result<(), String> {
 }
 
 /// Reads the first of `candidates` that exists, leaking its bytes to make them `'static`.
-fn read_font(candidates: &[&Path]) -> Result<(PathBuf, &'static [u8]), String> {
-    let mut problems = Vec::new();
+fn read_font(candidates: &[&Path]) -> Result<(PathBuf, &'static [u8]), FontError> {
+    let mut tried = Vec::new();
     for &path in candidates {
         match std::fs::read(path) {
             Ok(bytes) => return Ok((path.to_path_buf(), Box::leak(bytes.into_boxed_slice()))),
-            Err(e) => problems.push(format!("{}: {e}", path.display())),
+            Err(e) => tried.push((path.to_path_buf(), e)),
         }
     }
-    Err(format!("no font for plot text ({}); install the Debian package fonts-dejavu-core", problems.join("; ")))
+    Err(FontError::Missing { tried })
 }
 
 #[cfg(test)]
@@ -495,11 +598,11 @@ mod tests {
             let title = if i % 2 == 0 { "odd data" } else { "" };
             match write_png(&path, title, panels, 2) {
                 Ok(()) => assert_eq!(&std::fs::read(&path).unwrap()[..4], b"\x89PNG", "case {i}"),
-                Err(e) => assert!(e.contains("case"), "case {i}: unclear error {e}"),
+                Err(e) => assert!(e.to_string().contains("case"), "case {i}: unclear error {e}"),
             }
         }
         let none = dir.path().join("none.png");
-        let e = write_png(&none, "no panels", &[], 1).unwrap_err();
+        let e = write_png(&none, "no panels", &[], 1).unwrap_err().to_string();
         assert!(e.contains("none.png") && e.contains("no panels"), "{e}");
         assert!(!none.exists());
         assert!(leftovers(dir.path()).is_empty());
@@ -509,7 +612,7 @@ mod tests {
     fn missing_folder_is_an_error_naming_it() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("no-such-folder").join("figure.png");
-        let e = write_png(&path, "t", &[panel("p", vec![series("s", sine(10, 0.0), Style::Line)])], 1).unwrap_err();
+        let e = write_png(&path, "t", &[panel("p", vec![series("s", sine(10, 0.0), Style::Line)])], 1).unwrap_err().to_string();
         assert!(e.contains(&path.display().to_string()), "{e}");
         assert!(e.contains("does not exist"), "{e}");
         assert!(!path.exists());
@@ -519,7 +622,7 @@ mod tests {
     fn missing_font_is_a_clear_error() {
         let dir = tempfile::tempdir().unwrap();
         let fake = dir.path().join("NoSuchFont.ttf");
-        let e = read_font(&[fake.as_path()]).unwrap_err();
+        let e = read_font(&[fake.as_path()]).unwrap_err().to_string();
         assert!(e.contains("NoSuchFont.ttf") && e.contains("fonts-dejavu-core"), "{e}");
     }
 
