@@ -177,7 +177,7 @@ pub fn run(args: ExportArgs) -> Result<()> {
     };
     match command {
         Export::Fmi3 { input, output } => {
-            export_fmi3_twin(&input, &output).map_err(anyhow::Error::msg)?;
+            export_fmi3_twin(&input, &output)?;
             eprintln!("wrote {} (FMI 3.0 twin of {})", output.display(), input.display());
         }
         Export::Arm { arm, name, output } => {
@@ -287,7 +287,7 @@ fn write_fmu(
     platforms: Option<&[String]>,
     version: FmiVersion,
 ) -> Result<()> {
-    export_fmu_as(&spec, sources, output, platforms, version).map_err(anyhow::Error::msg)?;
+    export_fmu_as(&spec, sources, output, platforms, version)?;
     eprintln!("wrote {} ({}, {joints} joints, FMI {})", output.display(), spec.identifier, version.number());
     Ok(())
 }

@@ -3,6 +3,7 @@
 //! averaged over a short window, and the two passes averaged. One implementation for logs and
 //! for the paper's own sweeps.
 
+use anyhow::bail;
 use serde::Serialize;
 
 use super::{FrictionCurve, RobotLog};
@@ -45,7 +46,7 @@ impl Default for GravityOptions {
 
 impl GravityOptions {
     /// Refuses options that make no sense, naming them.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> anyhow::Result<()> {
         for (name, v) in [
             ("pass speed", self.speed_rad_s),
             ("window", self.window_s),
@@ -53,14 +54,14 @@ impl GravityOptions {
             ("shortest pass", self.min_pass_s),
         ] {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(format!("the {name} must be a positive number (got {v})"));
+                bail!("the {name} must be a positive number (got {v})");
             }
         }
         if !(self.share > 0.0 && self.share < 1.0) {
-            return Err(format!("the speed share must lie between 0 and 1 (got {})", self.share));
+            bail!("the speed share must lie between 0 and 1 (got {})", self.share);
         }
         if !(self.smoothing_s >= 0.0 && self.smoothing_s.is_finite()) {
-            return Err(format!("the smoothing must be >= 0 s (got {})", self.smoothing_s));
+            bail!("the smoothing must be >= 0 s (got {})", self.smoothing_s);
         }
         Ok(())
     }
@@ -298,11 +299,11 @@ pub fn identify_gravity_log(
     log: &RobotLog,
     options: &GravityOptions,
     correction: &GravityCorrection<'_>,
-) -> Result<GravityIdentification, String> {
+) -> anyhow::Result<GravityIdentification> {
     options.check()?;
     let n = log.joints.len();
     if !correction.friction.is_empty() && correction.friction.len() != n {
-        return Err(format!("friction pairs of {} joints for a log of {n} joints", correction.friction.len()));
+        bail!("friction pairs of {} joints for a log of {n} joints", correction.friction.len());
     }
     let rows = log.rows();
     // Moving averages of the speeds over the smoothing time, by prefix sums.
@@ -410,13 +411,13 @@ pub fn identify_gravity_log(
         }
     }
     if found.pairs.is_empty() {
-        return Err(format!(
+        bail!(
             "{}: no pose passed both up and down at {} rad/s (±{:.0} %) by every joint ({} passes found): see `neurarm plan gravity`",
             log.path.display(),
             options.speed_rad_s,
             100.0 * options.share,
             passes.len()
-        ));
+        );
     }
     Ok(found)
 }
