@@ -214,57 +214,18 @@ pub fn compensator_from_logs(
             bail!("{}: the log has {n} joints, the arm has {}", job.friction_log.display(), model.dof());
         }
     }
-    let settings = Settings { seed: job.seed, ..Settings::paper() };
-    let mut files = Vec::new();
+    let mut written = Written::default();
     let mut curves = Vec::new();
     let mut friction_pairs = Vec::new();
-    let mut sources = Vec::new();
     for joint in 1..=n {
-        let found = identify_friction_log(&probe, joint, &job.friction).context("friction")?;
-        say(friction_summary(joint, &found).lines().last().unwrap_or(""));
-        if found.pairs.len() < 4 {
-            bail!("friction of joint {joint}: only {} pairs from {}", found.pairs.len(), job.friction_log.display());
-        }
-        let pairs_path = job.work.join(format!("friction_{joint}.csv"));
-        let report = write_friction_pairs(&pairs_path, joint, &found)?;
-        files.push(pairs_path.clone());
-        files.extend(report);
-        say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
-        // `train_friction_net` (the experiments') says what failed in words.
-        let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed).map_err(anyhow::Error::msg)?;
-        let net_path = job.work.join(format!("friction_{joint}.json"));
-        write_text_atomic(&net_path, &net.to_json()).with_context(|| format!("writing {}", net_path.display()))?;
-        files.push(net_path.clone());
-        sources.push((format!("friction_{joint}.json"), net_path));
-        friction_pairs.push(found.pairs.len());
-        curves.push(FrictionCurve::new(&found.pairs));
+        let pairs = friction_net_from_log(job, &probe, joint, &mut written, say)?;
+        friction_pairs.push(pairs.len());
+        curves.push(FrictionCurve::new(&pairs));
     }
-    let mut gravity_pairs = None;
-    if let Some(log) = &job.gravity_log {
-        let log = RobotLog::read_all(log, &job.columns, Some(n))?;
-        let rigid = job.model.as_ref().map(|m| m.clone().with_base_angle(0.0).frictionless());
-        let correction = GravityCorrection { friction: &curves, model: rigid.as_ref() };
-        let found = identify_gravity_log(&log, &job.gravity, &correction).context("gravity")?;
-        say(gravity_summary(&found).lines().last().unwrap_or(""));
-        let pairs_path = job.work.join("gravity.csv");
-        let report = write_gravity_pairs(&pairs_path, &found)?;
-        files.push(pairs_path.clone());
-        files.extend(report);
-        let pairs: Vec<(Vec<f64>, Vec<f64>)> = found.pairs.iter().map(|p| (p.q.clone(), p.torque.clone())).collect();
-        if pairs.len() < 10 {
-            bail!("gravity: only {} pairs from {}; the net needs at least 10 poses", pairs.len(), log.path.display());
-        }
-        let hidden = gravity_hidden(pairs.len(), n);
-        say(&format!("training the gravity net ({hidden} hidden neurons) on {} pairs", pairs.len()));
-        let settings = Settings { gravity_hidden: hidden, ..settings.clone() };
-        // `train_gravity_net` (the experiments') says what failed in words.
-        let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch).map_err(anyhow::Error::msg)?;
-        let net_path = job.work.join("gravity.json");
-        write_text_atomic(&net_path, &net.to_json()).with_context(|| format!("writing {}", net_path.display()))?;
-        files.push(net_path.clone());
-        sources.push(("gravity.json".into(), net_path));
-        gravity_pairs = Some(pairs.len());
-    }
+    let gravity_pairs = match &job.gravity_log {
+        Some(log) => Some(gravity_net_from_log(job, log, n, &curves, &mut written, say, on_epoch)?),
+        None => None,
+    };
     let spec = FmuSpec {
         identifier: job.identifier.clone(),
         model: ModelSpec::NnCompensator(NnCompensatorSpec::of_nets(
@@ -273,7 +234,85 @@ pub fn compensator_from_logs(
             gravity_pairs.map(|_| "gravity.json".to_owned()),
         )),
     };
-    export_fmu_for(&spec, &sources, &job.output, job.platforms.as_deref())?;
-    files.push(job.output.clone());
-    Ok(CompensatorSummary { joints: n, friction_pairs, gravity_pairs, files })
+    export_fmu_for(&spec, &written.sources, &job.output, job.platforms.as_deref())?;
+    written.files.push(job.output.clone());
+    Ok(CompensatorSummary { joints: n, friction_pairs, gravity_pairs, files: written.files })
+}
+
+/// What the steps of [`compensator_from_logs`] wrote: every file in order, and the nets the
+/// FMU carries as `(resource name, file)`.
+#[derive(Default)]
+struct Written {
+    files: Vec<PathBuf>,
+    sources: Vec<(String, PathBuf)>,
+}
+
+impl Written {
+    /// Writes the net `net` to `name` in `work`, as a source of the FMU.
+    fn net(&mut self, work: &Path, name: &str, net: &neurarm_physics::nn::WeightsFile) -> Result<()> {
+        let path = work.join(name);
+        write_text_atomic(&path, &net.to_json()).with_context(|| format!("writing {}", path.display()))?;
+        self.files.push(path.clone());
+        self.sources.push((name.to_owned(), path));
+        Ok(())
+    }
+}
+
+/// Joint `joint`'s friction pairs from the friction log `probe`, written with their report and
+/// net (`friction_J.csv`, `.json`); returns the pairs.
+fn friction_net_from_log(
+    job: &CompensatorJob,
+    probe: &RobotLog,
+    joint: usize,
+    written: &mut Written,
+    say: &mut dyn FnMut(&str),
+) -> Result<Vec<FrictionPair>> {
+    let found = identify_friction_log(probe, joint, &job.friction).context("friction")?;
+    say(friction_summary(joint, &found).lines().last().unwrap_or(""));
+    if found.pairs.len() < 4 {
+        bail!("friction of joint {joint}: only {} pairs from {}", found.pairs.len(), job.friction_log.display());
+    }
+    let pairs_path = job.work.join(format!("friction_{joint}.csv"));
+    let report = write_friction_pairs(&pairs_path, joint, &found)?;
+    written.files.push(pairs_path);
+    written.files.extend(report);
+    say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
+    // `train_friction_net` (the experiments') says what failed in words.
+    let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed).map_err(anyhow::Error::msg)?;
+    written.net(&job.work, &format!("friction_{joint}.json"), &net)?;
+    Ok(found.pairs)
+}
+
+/// The gravity pairs of the gravity log `log` of `n` joints, `curves` (each joint's friction)
+/// and the model's velocity terms taken out, written with their report and the link-angle net
+/// (`gravity.csv`, `.json`); returns the number of pairs.
+fn gravity_net_from_log(
+    job: &CompensatorJob,
+    log: &Path,
+    n: usize,
+    curves: &[FrictionCurve],
+    written: &mut Written,
+    say: &mut dyn FnMut(&str),
+    on_epoch: &mut dyn FnMut(&EpochInfo<'_>),
+) -> Result<usize> {
+    let log = RobotLog::read_all(log, &job.columns, Some(n))?;
+    let rigid = job.model.as_ref().map(|m| m.clone().with_base_angle(0.0).frictionless());
+    let correction = GravityCorrection { friction: curves, model: rigid.as_ref() };
+    let found = identify_gravity_log(&log, &job.gravity, &correction).context("gravity")?;
+    say(gravity_summary(&found).lines().last().unwrap_or(""));
+    let pairs_path = job.work.join("gravity.csv");
+    let report = write_gravity_pairs(&pairs_path, &found)?;
+    written.files.push(pairs_path);
+    written.files.extend(report);
+    let pairs: Vec<(Vec<f64>, Vec<f64>)> = found.pairs.iter().map(|p| (p.q.clone(), p.torque.clone())).collect();
+    if pairs.len() < 10 {
+        bail!("gravity: only {} pairs from {}; the net needs at least 10 poses", pairs.len(), log.path.display());
+    }
+    let hidden = gravity_hidden(pairs.len(), n);
+    say(&format!("training the gravity net ({hidden} hidden neurons) on {} pairs", pairs.len()));
+    let settings = Settings { seed: job.seed, gravity_hidden: hidden, ..Settings::paper() };
+    // `train_gravity_net` (the experiments') says what failed in words.
+    let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch).map_err(anyhow::Error::msg)?;
+    written.net(&job.work, "gravity.json", &net)?;
+    Ok(pairs.len())
 }
