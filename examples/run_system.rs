@@ -17,7 +17,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scratch = tempfile::tempdir()?;
     let dir = std::env::args_os().nth(1).map(PathBuf::from).unwrap_or_else(|| scratch.path().to_owned());
     std::fs::create_dir_all(&dir)?;
-    let export = |id: &str, model: ModelSpec| -> Result<PathBuf, String> {
+    let export = |id: &str, model: ModelSpec| -> Result<PathBuf, Box<dyn std::error::Error>> {
         let path = dir.join(format!("{id}.fmu"));
         export_fmu(&FmuSpec { identifier: id.into(), model }, &[], &path)?;
         Ok(path)

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use crate::experiments::{train_friction_net, train_gravity_net, Settings};
@@ -20,23 +21,23 @@ use neurarm_physics::nn::{EpochInfo, InputEncoding};
 /// `samples`, and, when `path` is a file, the identification's verdicts as JSON beside them
 /// (`.json`); returns the JSON's path, or `None` when the pairs went to standard output, a
 /// device or a FIFO (see [`crate::output`]), which have no "beside".
-pub fn write_friction_pairs(path: &Path, joint: usize, found: &FrictionIdentification) -> Result<Option<PathBuf>, String> {
+pub fn write_friction_pairs(path: &Path, joint: usize, found: &FrictionIdentification) -> Result<Option<PathBuf>> {
     let names = vec![header_cell(&format!("qd_{joint}"), "rad/s"), header_cell(&format!("tau_friction_{joint}"), "N.m"), "samples".into()];
-    let json = serde_json::to_string_pretty(&FrictionFile { joint, identification: found }).map_err(|e| e.to_string())?;
+    let json = serde_json::to_string_pretty(&FrictionFile { joint, identification: found })?;
     let report = write_report_beside(path, &json)?;
     write_atomic(path, &names, found.pairs.iter().map(|p| vec![p.0, p.1, p.2 as f64]))
-        .map_err(|e| format!("writing {}: {e}", crate::output::describe(path)))?;
+        .with_context(|| format!("writing {}", crate::output::describe(path)))?;
     Ok(report)
 }
 
 /// Writes `json` to the report beside the pairs `path` when `path` is a file; returns its path.
-fn write_report_beside(path: &Path, json: &str) -> Result<Option<PathBuf>, String> {
-    let destination = crate::output::Destination::of(path).map_err(|e| format!("{}: {e}", path.display()))?;
+fn write_report_beside(path: &Path, json: &str) -> Result<Option<PathBuf>> {
+    let destination = crate::output::Destination::of(path).with_context(|| path.display().to_string())?;
     if !destination.is_file() {
         return Ok(None);
     }
     let report = report_path(path)?;
-    write_text_atomic(&report, json).map_err(|e| format!("writing {}: {e}", report.display()))?;
+    write_text_atomic(&report, json).with_context(|| format!("writing {}", report.display()))?;
     Ok(Some(report))
 }
 
@@ -47,27 +48,27 @@ struct FrictionFile<'a> {
 }
 
 /// The JSON report beside a pairs file: same name, `.json`.
-pub fn report_path(pairs: &Path) -> Result<PathBuf, String> {
+pub fn report_path(pairs: &Path) -> Result<PathBuf> {
     let report = pairs.with_extension("json");
     if report == pairs {
-        return Err(format!("{}: give the pairs a .csv name (the report goes to a .json beside it)", pairs.display()));
+        bail!("{}: give the pairs a .csv name (the report goes to a .json beside it)", pairs.display());
     }
     Ok(report)
 }
 
 /// Reads friction pairs written by [`write_friction_pairs`] (any file with `qd_J` and
 /// `tau_friction_J` or `tau_J` columns): (joint, pairs by speed).
-pub fn read_friction_pairs(path: &Path) -> Result<(usize, Vec<FrictionPair>), String> {
-    let table = NumericTable::read(path, &[]).map_err(|e| e.to_string())?;
+pub fn read_friction_pairs(path: &Path) -> Result<(usize, Vec<FrictionPair>)> {
+    let table = NumericTable::read(path, &[])?;
     let speed = table
         .names
         .iter()
         .find_map(|n| n.strip_prefix("qd_").and_then(|j| j.parse::<usize>().ok()))
-        .ok_or_else(|| format!("{}: no speed column qd_J (the header has: {})", path.display(), table.names.join(", ")))?;
+        .with_context(|| format!("{}: no speed column qd_J (the header has: {})", path.display(), table.names.join(", ")))?;
     let torque = [format!("tau_friction_{speed}"), format!("tau_{speed}")]
         .into_iter()
         .find(|n| table.column(n).is_some())
-        .ok_or_else(|| format!("{}: no torque column tau_friction_{speed} for qd_{speed}", path.display()))?;
+        .with_context(|| format!("{}: no torque column tau_friction_{speed} for qd_{speed}", path.display()))?;
     let (v, t) = (table.column(&format!("qd_{speed}")).expect("found"), table.column(&torque).expect("found"));
     let mut pairs: Vec<FrictionPair> = v.iter().zip(t).map(|(&v, &t)| (v, t, 1)).collect();
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -116,15 +117,15 @@ pub fn friction_summary(joint: usize, found: &FrictionIdentification) -> String 
 /// Writes gravity pairs: `q_i [rad]`, `tau_gravity_i [N.m]` (corrected), `tau_plain_i [N.m]` (the
 /// plain average), and, when `path` is a file, the poses' verdicts as JSON beside them; returns
 /// the JSON's path as [`write_friction_pairs`] does.
-pub fn write_gravity_pairs(path: &Path, found: &GravityIdentification) -> Result<Option<PathBuf>, String> {
+pub fn write_gravity_pairs(path: &Path, found: &GravityIdentification) -> Result<Option<PathBuf>> {
     let n = found.pairs.first().map_or(0, |p| p.q.len());
     let mut names: Vec<String> = (1..=n).map(|i| header_cell(&format!("q_{i}"), "rad")).collect();
     names.extend((1..=n).map(|i| header_cell(&format!("tau_gravity_{i}"), "N.m")));
     names.extend((1..=n).map(|i| header_cell(&format!("tau_plain_{i}"), "N.m")));
-    let json = serde_json::to_string_pretty(found).map_err(|e| e.to_string())?;
+    let json = serde_json::to_string_pretty(found)?;
     let report = write_report_beside(path, &json)?;
     write_atomic(path, &names, found.pairs.iter().map(|p| [p.q.clone(), p.torque.clone(), p.torque_uncorrected.clone()].concat()))
-        .map_err(|e| format!("writing {}: {e}", crate::output::describe(path)))?;
+        .with_context(|| format!("writing {}", crate::output::describe(path)))?;
     Ok(report)
 }
 
@@ -203,65 +204,28 @@ pub fn compensator_from_logs(
     job: &CompensatorJob,
     say: &mut dyn FnMut(&str),
     on_epoch: &mut dyn FnMut(&EpochInfo<'_>),
-) -> Result<CompensatorSummary, String> {
+) -> Result<CompensatorSummary> {
     job.columns.check()?;
-    std::fs::create_dir_all(&job.work).map_err(|e| format!("{}: {e}", job.work.display()))?;
-    let probe = RobotLog::read_all(&job.friction_log, &job.columns, None).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&job.work).with_context(|| job.work.display().to_string())?;
+    let probe = RobotLog::read_all(&job.friction_log, &job.columns, None)?;
     let n = probe.joints.len();
     if let Some(model) = &job.model {
         if model.dof() != n {
-            return Err(format!("{}: the log has {n} joints, the arm has {}", job.friction_log.display(), model.dof()));
+            bail!("{}: the log has {n} joints, the arm has {}", job.friction_log.display(), model.dof());
         }
     }
-    let settings = Settings { seed: job.seed, ..Settings::paper() };
-    let mut files = Vec::new();
+    let mut written = Written::default();
     let mut curves = Vec::new();
     let mut friction_pairs = Vec::new();
-    let mut sources = Vec::new();
     for joint in 1..=n {
-        let found = identify_friction_log(&probe, joint, &job.friction).map_err(|e| format!("friction: {e}"))?;
-        say(friction_summary(joint, &found).lines().last().unwrap_or(""));
-        if found.pairs.len() < 4 {
-            return Err(format!("friction of joint {joint}: only {} pairs from {}", found.pairs.len(), job.friction_log.display()));
-        }
-        let pairs_path = job.work.join(format!("friction_{joint}.csv"));
-        let report = write_friction_pairs(&pairs_path, joint, &found)?;
-        files.push(pairs_path.clone());
-        files.extend(report);
-        say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
-        let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed)?;
-        let net_path = job.work.join(format!("friction_{joint}.json"));
-        write_text_atomic(&net_path, &net.to_json()).map_err(|e| format!("writing {}: {e}", net_path.display()))?;
-        files.push(net_path.clone());
-        sources.push((format!("friction_{joint}.json"), net_path));
-        friction_pairs.push(found.pairs.len());
-        curves.push(FrictionCurve::new(&found.pairs));
+        let pairs = friction_net_from_log(job, &probe, joint, &mut written, say)?;
+        friction_pairs.push(pairs.len());
+        curves.push(FrictionCurve::new(&pairs));
     }
-    let mut gravity_pairs = None;
-    if let Some(log) = &job.gravity_log {
-        let log = RobotLog::read_all(log, &job.columns, Some(n)).map_err(|e| e.to_string())?;
-        let rigid = job.model.as_ref().map(|m| m.clone().with_base_angle(0.0).frictionless());
-        let correction = GravityCorrection { friction: &curves, model: rigid.as_ref() };
-        let found = identify_gravity_log(&log, &job.gravity, &correction).map_err(|e| format!("gravity: {e}"))?;
-        say(gravity_summary(&found).lines().last().unwrap_or(""));
-        let pairs_path = job.work.join("gravity.csv");
-        let report = write_gravity_pairs(&pairs_path, &found)?;
-        files.push(pairs_path.clone());
-        files.extend(report);
-        let pairs: Vec<(Vec<f64>, Vec<f64>)> = found.pairs.iter().map(|p| (p.q.clone(), p.torque.clone())).collect();
-        if pairs.len() < 10 {
-            return Err(format!("gravity: only {} pairs from {}; the net needs at least 10 poses", pairs.len(), log.path.display()));
-        }
-        let hidden = gravity_hidden(pairs.len(), n);
-        say(&format!("training the gravity net ({hidden} hidden neurons) on {} pairs", pairs.len()));
-        let settings = Settings { gravity_hidden: hidden, ..settings.clone() };
-        let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch)?;
-        let net_path = job.work.join("gravity.json");
-        write_text_atomic(&net_path, &net.to_json()).map_err(|e| format!("writing {}: {e}", net_path.display()))?;
-        files.push(net_path.clone());
-        sources.push(("gravity.json".into(), net_path));
-        gravity_pairs = Some(pairs.len());
-    }
+    let gravity_pairs = match &job.gravity_log {
+        Some(log) => Some(gravity_net_from_log(job, log, n, &curves, &mut written, say, on_epoch)?),
+        None => None,
+    };
     let spec = FmuSpec {
         identifier: job.identifier.clone(),
         model: ModelSpec::NnCompensator(NnCompensatorSpec::of_nets(
@@ -270,7 +234,85 @@ pub fn compensator_from_logs(
             gravity_pairs.map(|_| "gravity.json".to_owned()),
         )),
     };
-    export_fmu_for(&spec, &sources, &job.output, job.platforms.as_deref())?;
-    files.push(job.output.clone());
-    Ok(CompensatorSummary { joints: n, friction_pairs, gravity_pairs, files })
+    export_fmu_for(&spec, &written.sources, &job.output, job.platforms.as_deref())?;
+    written.files.push(job.output.clone());
+    Ok(CompensatorSummary { joints: n, friction_pairs, gravity_pairs, files: written.files })
+}
+
+/// What the steps of [`compensator_from_logs`] wrote: every file in order, and the nets the
+/// FMU carries as `(resource name, file)`.
+#[derive(Default)]
+struct Written {
+    files: Vec<PathBuf>,
+    sources: Vec<(String, PathBuf)>,
+}
+
+impl Written {
+    /// Writes the net `net` to `name` in `work`, as a source of the FMU.
+    fn net(&mut self, work: &Path, name: &str, net: &neurarm_physics::nn::WeightsFile) -> Result<()> {
+        let path = work.join(name);
+        write_text_atomic(&path, &net.to_json()).with_context(|| format!("writing {}", path.display()))?;
+        self.files.push(path.clone());
+        self.sources.push((name.to_owned(), path));
+        Ok(())
+    }
+}
+
+/// Joint `joint`'s friction pairs from the friction log `probe`, written with their report and
+/// net (`friction_J.csv`, `.json`); returns the pairs.
+fn friction_net_from_log(
+    job: &CompensatorJob,
+    probe: &RobotLog,
+    joint: usize,
+    written: &mut Written,
+    say: &mut dyn FnMut(&str),
+) -> Result<Vec<FrictionPair>> {
+    let found = identify_friction_log(probe, joint, &job.friction).context("friction")?;
+    say(friction_summary(joint, &found).lines().last().unwrap_or(""));
+    if found.pairs.len() < 4 {
+        bail!("friction of joint {joint}: only {} pairs from {}", found.pairs.len(), job.friction_log.display());
+    }
+    let pairs_path = job.work.join(format!("friction_{joint}.csv"));
+    let report = write_friction_pairs(&pairs_path, joint, &found)?;
+    written.files.push(pairs_path);
+    written.files.extend(report);
+    say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
+    // `train_friction_net` (the experiments') says what failed in words.
+    let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed).map_err(anyhow::Error::msg)?;
+    written.net(&job.work, &format!("friction_{joint}.json"), &net)?;
+    Ok(found.pairs)
+}
+
+/// The gravity pairs of the gravity log `log` of `n` joints, `curves` (each joint's friction)
+/// and the model's velocity terms taken out, written with their report and the link-angle net
+/// (`gravity.csv`, `.json`); returns the number of pairs.
+fn gravity_net_from_log(
+    job: &CompensatorJob,
+    log: &Path,
+    n: usize,
+    curves: &[FrictionCurve],
+    written: &mut Written,
+    say: &mut dyn FnMut(&str),
+    on_epoch: &mut dyn FnMut(&EpochInfo<'_>),
+) -> Result<usize> {
+    let log = RobotLog::read_all(log, &job.columns, Some(n))?;
+    let rigid = job.model.as_ref().map(|m| m.clone().with_base_angle(0.0).frictionless());
+    let correction = GravityCorrection { friction: curves, model: rigid.as_ref() };
+    let found = identify_gravity_log(&log, &job.gravity, &correction).context("gravity")?;
+    say(gravity_summary(&found).lines().last().unwrap_or(""));
+    let pairs_path = job.work.join("gravity.csv");
+    let report = write_gravity_pairs(&pairs_path, &found)?;
+    written.files.push(pairs_path);
+    written.files.extend(report);
+    let pairs: Vec<(Vec<f64>, Vec<f64>)> = found.pairs.iter().map(|p| (p.q.clone(), p.torque.clone())).collect();
+    if pairs.len() < 10 {
+        bail!("gravity: only {} pairs from {}; the net needs at least 10 poses", pairs.len(), log.path.display());
+    }
+    let hidden = gravity_hidden(pairs.len(), n);
+    say(&format!("training the gravity net ({hidden} hidden neurons) on {} pairs", pairs.len()));
+    let settings = Settings { seed: job.seed, gravity_hidden: hidden, ..Settings::paper() };
+    // `train_gravity_net` (the experiments') says what failed in words.
+    let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch).map_err(anyhow::Error::msg)?;
+    written.net(&job.work, "gravity.json", &net)?;
+    Ok(pairs.len())
 }

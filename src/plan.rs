@@ -19,6 +19,8 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
+use anyhow::{bail, Context, Result};
+
 use crate::experiments::gravity::design_poses;
 use crate::experiments::{held_inertia, GravityDesign};
 use crate::table::{header_cell, number, write_text_atomic};
@@ -46,24 +48,18 @@ impl FrictionPlanSettings {
         Self { joints: (1..=joints).collect(), max_speed_rad_s: 5.0, spacing_rad_s: 0.1, window_s: 0.5, longest_level_s: 30.0 }
     }
 
-    fn check(&self, n: usize) -> Result<(), String> {
+    fn check(&self, n: usize) -> Result<()> {
         if let Some(j) = self.joints.iter().find(|&&j| j == 0 || j > n) {
-            return Err(format!("joint {j}: the arm has joints 1 to {n}"));
+            bail!("joint {j}: the arm has joints 1 to {n}");
         }
         if !(self.max_speed_rad_s > 0.0 && self.spacing_rad_s > 0.0 && self.spacing_rad_s <= self.max_speed_rad_s) {
-            return Err(format!(
-                "need 0 < spacing <= max speed (got spacing {} rad/s, max speed {} rad/s)",
-                self.spacing_rad_s, self.max_speed_rad_s
-            ));
+            bail!("need 0 < spacing <= max speed (got spacing {} rad/s, max speed {} rad/s)", self.spacing_rad_s, self.max_speed_rad_s);
         }
         if self.max_speed_rad_s / self.spacing_rad_s > 1000.0 {
-            return Err("more than 1000 levels per direction: take a larger spacing".into());
+            bail!("more than 1000 levels per direction: take a larger spacing");
         }
         if !(self.window_s > 0.0 && self.longest_level_s >= 2.0 * self.window_s && self.longest_level_s.is_finite()) {
-            return Err(format!(
-                "need a window > 0 and levels of at least two windows (got {} s, {} s)",
-                self.window_s, self.longest_level_s
-            ));
+            bail!("need a window > 0 and levels of at least two windows (got {} s, {} s)", self.window_s, self.longest_level_s);
         }
         Ok(())
     }
@@ -103,7 +99,7 @@ const LOWEST_SPEED_RAD_S: f64 = 0.04;
 const PROBE_S: f64 = 1.0;
 
 /// Plans the friction experiment of `arm` from its expected friction (see the module docs).
-pub fn friction_plan(arm: &ArmParams, settings: &FrictionPlanSettings) -> Result<FrictionPlan, String> {
+pub fn friction_plan(arm: &ArmParams, settings: &FrictionPlanSettings) -> Result<FrictionPlan> {
     let n = arm.dof();
     settings.check(n)?;
     let round = |t: f64| (t * 10.0).ceil() / 10.0;
@@ -268,13 +264,11 @@ pub struct GravityPlan {
 
 /// Plans the gravity sweep: for each pose of the design a smooth move to just below it, then
 /// every joint up through it and back down at constant speed (the paper's sweep).
-pub fn gravity_plan(joints: usize, settings: &GravityPlanSettings) -> Result<GravityPlan, String> {
-    settings.design.check(joints)?;
+pub fn gravity_plan(joints: usize, settings: &GravityPlanSettings) -> Result<GravityPlan> {
+    // `GravityDesign::check` (the experiments') says what is wrong in words.
+    settings.design.check(joints).map_err(anyhow::Error::msg)?;
     if !(settings.speed_rad_s > 0.0 && settings.speed_rad_s.is_finite() && settings.pass_s >= 0.1 && settings.pass_s.is_finite()) {
-        return Err(format!(
-            "need a pass speed > 0 and passes of at least 0.1 s (got {} rad/s, {} s)",
-            settings.speed_rad_s, settings.pass_s
-        ));
+        bail!("need a pass speed > 0 and passes of at least 0.1 s (got {} rad/s, {} s)", settings.speed_rad_s, settings.pass_s);
     }
     let (poses, _) = design_poses(settings.design, joints, settings.seed);
     let offset = 0.5 * settings.speed_rad_s * settings.pass_s;
@@ -347,16 +341,16 @@ impl GravityPlan {
 /// Writes `csv` to `path` (see [`crate::output`]) and, when `path` is a file, `text` beside it
 /// (same name, `.txt`), each atomically; returns the text file's path, or `None` when `path` is
 /// standard output, a device or a FIFO: then there is no "beside", and the caller shows the text.
-pub fn write_plan(path: &Path, csv: &str, text: &str) -> Result<Option<std::path::PathBuf>, String> {
-    let beside = crate::output::Destination::of(path).map_err(|e| format!("{}: {e}", path.display()))?.is_file();
+pub fn write_plan(path: &Path, csv: &str, text: &str) -> Result<Option<std::path::PathBuf>> {
+    let beside = crate::output::Destination::of(path).with_context(|| path.display().to_string())?.is_file();
     let notes = path.with_extension("txt");
     if beside && notes == path {
-        return Err(format!("{}: give the plan a .csv name (its instructions go to a .txt beside it)", path.display()));
+        bail!("{}: give the plan a .csv name (its instructions go to a .txt beside it)", path.display());
     }
-    write_text_atomic(path, csv).map_err(|e| format!("writing {}: {e}", crate::output::describe(path)))?;
+    write_text_atomic(path, csv).with_context(|| format!("writing {}", crate::output::describe(path)))?;
     if !beside {
         return Ok(None);
     }
-    write_text_atomic(&notes, text).map_err(|e| format!("writing {}: {e}", notes.display()))?;
+    write_text_atomic(&notes, text).with_context(|| format!("writing {}", notes.display()))?;
     Ok(Some(notes))
 }

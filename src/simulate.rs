@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use crate::table::{NumericTable, TableError};
-use neurarm_physics::arm::{end_effector_state, ArmState, StepError};
+use neurarm_physics::arm::{end_effector_state, inverse_dynamics_rnea_into, ArmData, ArmParams, ArmState, StepError};
 use neurarm_physics::config::ArmConfig;
 
 /// Name of joint `i`'s (0-based) column with prefix `prefix`, e.g. `tau_1`.
@@ -83,6 +83,30 @@ pub fn simulate(config: &ArmConfig, initial: &ArmState, input: &TorqueInput) -> 
     let n = config.arm.dof();
     let (mut sim, mut sensors) = config.build().map_err(SimulateError::Config)?;
     let measured = config.hardware.distorts_measurements();
+    let names = trajectory_names(n, measured);
+    let mut state = initial.clone();
+    let mut tau = vec![0.0; n];
+    let (mut q_meas, mut qd_meas) = (vec![0.0; n], vec![0.0; n]);
+    let mut rows = Vec::with_capacity(input.time.len());
+    for (r, &t) in input.time.iter().enumerate() {
+        for (i, column) in input.torque.iter().enumerate() {
+            tau[i] = column[r];
+        }
+        if measured {
+            sensors.measure(&state, &mut q_meas, &mut qd_meas);
+        }
+        rows.push(trajectory_row(config, t, &state, &tau, measured.then_some((&q_meas[..], &qd_meas[..]))));
+        if let Some(&next) = input.time.get(r + 1) {
+            sim.step(&mut state, &tau, next - t).map_err(|cause| SimulateError::Step { time: t, cause })?;
+            check_finite(&state, t, next, &tau, sim.settings().internal_step_s)?;
+        }
+    }
+    Ok(Trajectory { names, rows })
+}
+
+/// The columns of a trajectory of `n` joints: time, q_i, qd_i, x, y, xd, yd, tau_i, and, when
+/// `measured`, q_meas_i and qd_meas_i.
+fn trajectory_names(n: usize, measured: bool) -> Vec<String> {
     let mut names = vec!["time".to_owned()];
     for prefix in ["q", "qd"] {
         names.extend((0..n).map(|i| joint_column(prefix, i)));
@@ -94,32 +118,25 @@ pub fn simulate(config: &ArmConfig, initial: &ArmState, input: &TorqueInput) -> 
             names.extend((0..n).map(|i| joint_column(prefix, i)));
         }
     }
-    let mut state = initial.clone();
-    let mut tau = vec![0.0; n];
-    let (mut q_meas, mut qd_meas) = (vec![0.0; n], vec![0.0; n]);
-    let mut rows = Vec::with_capacity(input.time.len());
-    for (r, &t) in input.time.iter().enumerate() {
-        for (i, column) in input.torque.iter().enumerate() {
-            tau[i] = column[r];
-        }
-        let mut row = Vec::with_capacity(names.len());
-        row.push(t);
-        row.extend(&state.q);
-        row.extend(&state.qd);
-        row.extend(end_effector_state(&config.arm, &state.q, &state.qd));
-        row.extend(&tau);
-        if measured {
-            sensors.measure(&state, &mut q_meas, &mut qd_meas);
-            row.extend(&q_meas);
-            row.extend(&qd_meas);
-        }
-        rows.push(row);
-        if let Some(&next) = input.time.get(r + 1) {
-            sim.step(&mut state, &tau, next - t).map_err(|cause| SimulateError::Step { time: t, cause })?;
-            check_finite(&state, t, next, &tau, sim.settings().internal_step_s)?;
-        }
+    names
+}
+
+/// One row of a trajectory (see [`trajectory_names`]) at time `t` [s]: `state`, the end
+/// effector's position and velocity, the torques `tau` [N·m] and the `measured` angles and
+/// speeds.
+fn trajectory_row(config: &ArmConfig, t: f64, state: &ArmState, tau: &[f64], measured: Option<(&[f64], &[f64])>) -> Vec<f64> {
+    let n = tau.len();
+    let mut row = Vec::with_capacity(1 + 5 * n + 4);
+    row.push(t);
+    row.extend(&state.q);
+    row.extend(&state.qd);
+    row.extend(end_effector_state(&config.arm, &state.q, &state.qd));
+    row.extend(tau);
+    if let Some((q_meas, qd_meas)) = measured {
+        row.extend(q_meas);
+        row.extend(qd_meas);
     }
-    Ok(Trajectory { names, rows })
+    row
 }
 
 /// Why a simulation stopped.
@@ -297,100 +314,118 @@ pub const PLAN_TRACK_RAD_S: f64 = 20.0;
 /// from the configured arm's rigid-body model (gravity included, friction not), a driven joint
 /// its planned torque. Writes every `every`-th step, as [`simulate`] writes its rows.
 pub fn simulate_plan(config: &ArmConfig, initial: &ArmState, plan: &Plan, step: f64, every: usize) -> Result<Trajectory, SimulateError> {
-    use neurarm_physics::arm::{inverse_dynamics_rnea_into, ArmData};
     let n = config.arm.dof();
     let (mut sim, mut sensors) = config.build().map_err(SimulateError::Config)?;
-    let model = config.arm.clone().frictionless();
-    let mut data = ArmData::new(&model);
+    let mut player = PlanPlayer::new(config, plan, step);
     let measured = config.hardware.distorts_measurements();
-    let mut names = vec!["time".to_owned()];
-    for prefix in ["q", "qd"] {
-        names.extend((0..n).map(|i| joint_column(prefix, i)));
-    }
-    names.extend(["x", "y", "xd", "yd"].map(String::from));
-    names.extend((0..n).map(|i| joint_column("tau", i)));
-    if measured {
-        for prefix in ["q_meas", "qd_meas"] {
-            names.extend((0..n).map(|i| joint_column(prefix, i)));
-        }
-    }
+    let names = trajectory_names(n, measured);
     let (start, end) = plan.span();
     let steps = ((end - start) / step).round() as usize;
     let mut state = initial.clone();
     let (mut q_meas, mut qd_meas) = (vec![0.0; n], vec![0.0; n]);
-    let (mut tau, mut u, mut qd_use) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut hold_at: Vec<Option<f64>> = vec![None; n];
     let mut rows = Vec::with_capacity(steps / every.max(1) + 1);
-    let mut row_index = 0;
     for k in 0..=steps {
         let t = start + k as f64 * step;
         sensors.measure(&state, &mut q_meas, &mut qd_meas);
-        let times = match plan {
-            Plan::Friction { time, .. } | Plan::Gravity { time, .. } => time,
-        };
-        while row_index + 1 < times.len() && times[row_index + 1] <= t + 1e-9 {
-            row_index += 1;
-        }
-        let r = row_index;
-        match plan {
-            Plan::Friction { torque, hold, .. } => {
-                let w = PLAN_HOLD_RAD_S;
-                for i in 0..n {
-                    if hold[i][r] {
-                        let target = *hold_at[i].get_or_insert(q_meas[i]);
-                        u[i] = w * w * (target - q_meas[i]) - 2.0 * w * qd_meas[i];
-                    } else {
-                        hold_at[i] = None;
-                        u[i] = 0.0;
-                    }
-                    qd_use[i] = qd_meas[i];
-                }
-                inverse_dynamics_rnea_into(&model, &mut data, &q_meas, &qd_use, &u, &mut tau);
-                for i in 0..n {
-                    if !hold[i][r] {
-                        tau[i] = torque[i][r];
-                    }
-                }
-            }
-            Plan::Gravity { time, pass, q, qd } => {
-                let w = PLAN_TRACK_RAD_S;
-                let (t0, t1) = (time[r], time.get(r + 1).copied().unwrap_or(time[r]));
-                for i in 0..n {
-                    let (reference, rate, accel) = if pass[r] != 0 || r + 1 == time.len() {
-                        let moving = if r + 1 == time.len() { 0.0 } else { qd[i][r] };
-                        (q[i][r] + moving * (t - t0), moving, 0.0)
-                    } else {
-                        // Rest-to-rest cosine move to the next row's angles.
-                        let (a, b, d) = (q[i][r], q[i][r + 1], (t1 - t0).max(step));
-                        let s = ((t - t0) / d).clamp(0.0, 1.0);
-                        (
-                            a + (b - a) * (0.5 - 0.5 * (PI * s).cos()),
-                            (b - a) * 0.5 * PI * (PI * s).sin() / d,
-                            (b - a) * 0.5 * PI * PI * (PI * s).cos() / (d * d),
-                        )
-                    };
-                    u[i] = accel + 2.0 * w * (rate - qd_meas[i]) + w * w * (reference - q_meas[i]);
-                }
-                inverse_dynamics_rnea_into(&model, &mut data, &q_meas, &qd_meas, &u, &mut tau);
-            }
-        }
+        let tau = player.torque(t, &q_meas, &qd_meas);
         if k % every.max(1) == 0 {
-            let mut row = Vec::with_capacity(names.len());
-            row.push(t);
-            row.extend(&state.q);
-            row.extend(&state.qd);
-            row.extend(end_effector_state(&config.arm, &state.q, &state.qd));
-            row.extend(&tau);
-            if measured {
-                row.extend(&q_meas);
-                row.extend(&qd_meas);
-            }
-            rows.push(row);
+            rows.push(trajectory_row(config, t, &state, tau, measured.then_some((&q_meas[..], &qd_meas[..]))));
         }
         if k < steps {
-            sim.step(&mut state, &tau, step).map_err(|cause| SimulateError::Step { time: t, cause })?;
-            check_finite(&state, t, t + step, &tau, sim.settings().internal_step_s)?;
+            sim.step(&mut state, tau, step).map_err(|cause| SimulateError::Step { time: t, cause })?;
+            check_finite(&state, t, t + step, tau, sim.settings().internal_step_s)?;
         }
     }
     Ok(Trajectory { names, rows })
+}
+
+/// The emulated controller of [`simulate_plan`]: the plan's current row, and computed torque
+/// from the arm's rigid-body model (friction left out).
+struct PlanPlayer<'a> {
+    plan: &'a Plan,
+    model: ArmParams,
+    data: ArmData,
+    /// The controller's step [s].
+    step: f64,
+    /// The plan's row in force.
+    row: usize,
+    /// Where each held joint is held [rad], from the start of its hold.
+    hold_at: Vec<Option<f64>>,
+    /// Commanded accelerations [rad/s²], speeds the model sees [rad/s] and torques [N·m].
+    u: Vec<f64>,
+    qd_use: Vec<f64>,
+    tau: Vec<f64>,
+}
+
+impl<'a> PlanPlayer<'a> {
+    fn new(config: &ArmConfig, plan: &'a Plan, step: f64) -> Self {
+        let n = config.arm.dof();
+        let model = config.arm.clone().frictionless();
+        let data = ArmData::new(&model);
+        Self { plan, model, data, step, row: 0, hold_at: vec![None; n], u: vec![0.0; n], qd_use: vec![0.0; n], tau: vec![0.0; n] }
+    }
+
+    /// The torques [N·m] at time `t` [s] from the measured angles [rad] and speeds [rad/s].
+    fn torque(&mut self, t: f64, q_meas: &[f64], qd_meas: &[f64]) -> &[f64] {
+        let times = match self.plan {
+            Plan::Friction { time, .. } | Plan::Gravity { time, .. } => time,
+        };
+        while self.row + 1 < times.len() && times[self.row + 1] <= t + 1e-9 {
+            self.row += 1;
+        }
+        match self.plan {
+            Plan::Friction { torque, hold, .. } => self.hold_or_drive(torque, hold, q_meas, qd_meas),
+            Plan::Gravity { time, pass, q, qd } => {
+                let w = PLAN_TRACK_RAD_S;
+                for i in 0..self.tau.len() {
+                    let (reference, rate, accel) = gravity_reference(time, pass, &q[i], &qd[i], self.row, t, self.step);
+                    self.u[i] = accel + 2.0 * w * (rate - qd_meas[i]) + w * w * (reference - q_meas[i]);
+                }
+                inverse_dynamics_rnea_into(&self.model, &mut self.data, q_meas, qd_meas, &self.u, &mut self.tau);
+            }
+        }
+        &self.tau
+    }
+
+    /// A friction plan's row: each held joint held where its hold began, each driven joint
+    /// given its planned torque.
+    fn hold_or_drive(&mut self, torque: &[Vec<f64>], hold: &[Vec<bool>], q_meas: &[f64], qd_meas: &[f64]) {
+        let (r, w) = (self.row, PLAN_HOLD_RAD_S);
+        for i in 0..self.tau.len() {
+            if hold[i][r] {
+                let target = *self.hold_at[i].get_or_insert(q_meas[i]);
+                self.u[i] = w * w * (target - q_meas[i]) - 2.0 * w * qd_meas[i];
+            } else {
+                self.hold_at[i] = None;
+                self.u[i] = 0.0;
+            }
+            self.qd_use[i] = qd_meas[i];
+        }
+        inverse_dynamics_rnea_into(&self.model, &mut self.data, q_meas, &self.qd_use, &self.u, &mut self.tau);
+        for i in 0..self.tau.len() {
+            if !hold[i][r] {
+                self.tau[i] = torque[i][r];
+            }
+        }
+    }
+}
+
+/// A gravity plan's reference for one joint (its angles `q` [rad] and speeds `qd` [rad/s] by
+/// row) in row `r` at time `t` [s]: angle [rad], speed [rad/s] and acceleration [rad/s²] of
+/// the pass at constant speed, or of the rest-to-rest cosine move to the next row's angle
+/// (lasting at least the controller's `step` [s]).
+fn gravity_reference(time: &[f64], pass: &[i8], q: &[f64], qd: &[f64], r: usize, t: f64, step: f64) -> (f64, f64, f64) {
+    let (t0, t1) = (time[r], time.get(r + 1).copied().unwrap_or(time[r]));
+    if pass[r] != 0 || r + 1 == time.len() {
+        let moving = if r + 1 == time.len() { 0.0 } else { qd[r] };
+        (q[r] + moving * (t - t0), moving, 0.0)
+    } else {
+        let (a, b, d) = (q[r], q[r + 1], (t1 - t0).max(step));
+        let s = ((t - t0) / d).clamp(0.0, 1.0);
+        (
+            a + (b - a) * (0.5 - 0.5 * (PI * s).cos()),
+            (b - a) * 0.5 * PI * (PI * s).sin() / d,
+            (b - a) * 0.5 * PI * PI * (PI * s).cos() / (d * d),
+        )
+    }
 }

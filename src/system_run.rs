@@ -6,7 +6,8 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
-use neurarm_cosim::{BaseType, OnDiscard, RunEnd, RunOutcome, SystemSpec};
+use anyhow::Context;
+use neurarm_cosim::{BaseType, MasterError, OnDiscard, RunEnd, RunOutcome, SystemSpec};
 
 /// How a run of a system file ended, for the CLI to report.
 #[derive(Debug)]
@@ -18,7 +19,7 @@ pub enum SystemRunEnd {
     /// Ctrl-C (or SIGINT) ended the run at this time [s].
     Interrupted(f64),
     /// A unit failed: the error, with the rows before it written.
-    Failed(String),
+    Failed(MasterError),
 }
 
 /// What a run wrote and said.
@@ -36,8 +37,9 @@ pub struct SystemRun {
 
 /// The flag Ctrl-C raises: installed once per process. A second Ctrl-C while the first is
 /// being handled ends the process at once (a unit stuck inside a call never returns).
-fn interrupt_flag() -> Result<Arc<AtomicBool>, String> {
-    static FLAG: OnceLock<Result<Arc<AtomicBool>, String>> = OnceLock::new();
+/// The outcome of the first installation is kept (shared: `ctrlc::Error` is no `Clone`).
+fn interrupt_flag() -> Result<Arc<AtomicBool>, Arc<ctrlc::Error>> {
+    static FLAG: OnceLock<Result<Arc<AtomicBool>, Arc<ctrlc::Error>>> = OnceLock::new();
     FLAG.get_or_init(|| {
         let flag = Arc::new(AtomicBool::new(false));
         let raised = flag.clone();
@@ -45,8 +47,7 @@ fn interrupt_flag() -> Result<Arc<AtomicBool>, String> {
             if raised.swap(true, Ordering::SeqCst) {
                 std::process::exit(130);
             }
-        })
-        .map_err(|e| format!("cannot catch Ctrl-C: {e}"))?;
+        })?;
         Ok(flag)
     })
     .clone()
@@ -57,24 +58,25 @@ fn interrupt_flag() -> Result<Arc<AtomicBool>, String> {
 /// the file's `[simulation] on_discard`.
 /// A write error keeps its `std::io::Error` in the chain (a closed pipe can be told apart).
 pub fn run_system_file(system: &Path, output: &Path, on_discard: Option<OnDiscard>) -> anyhow::Result<SystemRun> {
-    use anyhow::Context;
     let text = neurarm_physics::text_file::read_text(system, neurarm_physics::text_file::MAX_CONFIG_BYTES)
         .with_context(|| format!("reading {}", system.display()))?;
+    // `SystemSpec::from_toml` says what is wrong, and where, in words.
     let mut spec = SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
     if let Some(policy) = on_discard {
         spec.simulation.on_discard = policy;
     }
     let base = system.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let flag = interrupt_flag().map_err(anyhow::Error::msg)?;
-    let outcome = neurarm_cosim::run(&spec, base, Some(flag)).map_err(|e| anyhow::anyhow!("{}: {e}", system.display()))?;
+    let flag = interrupt_flag().context("cannot catch Ctrl-C")?;
+    let outcome = neurarm_cosim::run(&spec, base, Some(flag)).with_context(|| system.display().to_string())?;
     write_recording(output, &outcome).with_context(|| format!("writing {}", crate::output::describe(output)))?;
-    let end = match (&outcome.end, &outcome.error) {
-        (_, Some(e)) => SystemRunEnd::Failed(e.to_string()),
+    let (rows, last_time) = (outcome.rows.len(), outcome.rows.last().map(|r| r[0]));
+    let end = match (outcome.end, outcome.error) {
+        (_, Some(e)) => SystemRunEnd::Failed(e),
         (Some(RunEnd::Discarded { .. }), None) => SystemRunEnd::Discarded,
-        (Some(RunEnd::Interrupted { time }), None) => SystemRunEnd::Interrupted(*time),
+        (Some(RunEnd::Interrupted { time }), None) => SystemRunEnd::Interrupted(time),
         _ => SystemRunEnd::Completed,
     };
-    Ok(SystemRun { rows: outcome.rows.len(), last_time: outcome.rows.last().map(|r| r[0]), notices: outcome.notices, end })
+    Ok(SystemRun { rows, last_time, notices: outcome.notices, end })
 }
 
 /// A CSV field: quoted when it holds a comma, quote or line break.

@@ -150,18 +150,19 @@ impl EpochBar {
 }
 
 /// Parses a net's input encoding for clap.
-pub fn parse_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
-    InputEncoding::parse(text)
+pub fn parse_encoding(text: &str) -> Result<InputEncoding> {
+    // `InputEncoding::parse` says what is wrong in words.
+    InputEncoding::parse(text).map_err(anyhow::Error::msg)
 }
 
 /// Parses a gravity net's input encoding (one of angles) for clap.
-pub fn parse_angle_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
-    let encoding = InputEncoding::parse(text)?;
+pub fn parse_angle_encoding(text: &str) -> Result<InputEncoding> {
+    let encoding = parse_encoding(text)?;
     if encoding.is_of_angles() {
         Ok(encoding)
     } else {
         let names: Vec<&str> = InputEncoding::ANGLES.iter().map(|e| e.name()).collect();
-        Err(format!("'{text}' encodes speeds, not angles: use one of {}", names.join(", ")))
+        bail!("'{text}' encodes speeds, not angles: use one of {}", names.join(", "))
     }
 }
 
@@ -191,7 +192,7 @@ impl PlatformArgs {
     /// The platforms asked for (`None`: every one built), checked before any work starts: an
     /// unknown name or a platform not built is an error here, not after a long run.
     pub fn checked(self) -> Result<Option<Vec<String>>> {
-        neurarm::export::fmu_binaries(self.platforms.as_deref()).map_err(|e| anyhow::anyhow!("--platforms: {e}"))?;
+        neurarm::export::fmu_binaries(self.platforms.as_deref()).context("--platforms")?;
         Ok(self.platforms)
     }
 }

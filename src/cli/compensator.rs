@@ -52,7 +52,7 @@ pub fn run(args: CompensatorArgs) -> Result<()> {
         Some(c) => Some(ArmConfig::from_toml_file(&c)?.arm),
         None => None,
     };
-    neurarm::export::refuse_stdout(&output).map_err(anyhow::Error::msg)?;
+    neurarm::export::refuse_stdout(&output)?;
     let identifier = identifier_for(name, &output, "NnCompensator");
     let work = match work {
         Some(work) => work,
@@ -78,8 +78,7 @@ pub fn run(args: CompensatorArgs) -> Result<()> {
     };
     let bar = EpochBar::new(None);
     let summary =
-        neurarm::logs::compensator_from_logs(&job, &mut |line| bar.println(&format!("[compensator] {line}")), &mut |e| bar.show(e))
-            .map_err(anyhow::Error::msg);
+        neurarm::logs::compensator_from_logs(&job, &mut |line| bar.println(&format!("[compensator] {line}")), &mut |e| bar.show(e));
     bar.finish();
     let summary = summary?;
     eprintln!(

@@ -2,7 +2,7 @@
 //! Co-Simulation FMUs of the arm, the compensators (NN, ideal, adaptive) and the paper's
 //! controllers, and the FMI 3.0 twin of an FMI 2.0 FMU neurarm made.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 use clap::{Args, Subcommand};
@@ -171,13 +171,10 @@ pub fn run(args: ExportArgs) -> Result<()> {
     let command = args.what;
     // The twin takes its binaries from the FMU it is made from, not from this build.
     let platforms = if matches!(command, Export::Fmi3 { .. }) { None } else { args.platforms.checked()? };
-    let version = args.fmi;
-    let export = |spec: FmuSpec, sources: &[(String, PathBuf)], output: &std::path::Path, joints: usize| {
-        write_fmu(spec, sources, output, joints, platforms.as_deref(), version)
-    };
+    let target = Target { platforms: platforms.as_deref(), version: args.fmi };
     match command {
         Export::Fmi3 { input, output } => {
-            export_fmi3_twin(&input, &output).map_err(anyhow::Error::msg)?;
+            export_fmi3_twin(&input, &output)?;
             eprintln!("wrote {} (FMI 3.0 twin of {})", output.display(), input.display());
         }
         Export::Arm { arm, name, output } => {
@@ -185,85 +182,24 @@ pub fn run(args: ExportArgs) -> Result<()> {
             let n = config.arm.dof();
             let identifier = identifier_for(name, &output, "PlanarArm");
             let model = ModelSpec::PlanarArm(PlanarArmSpec { config, q0: initial.q, qd0: initial.qd });
-            export(FmuSpec { identifier, model }, &[], &output, n)?;
+            target.write(FmuSpec { identifier, model }, &[], &output, n)?;
         }
         Export::Compensator { friction, gravity, ideal: true, adaptive: _, config, name, output } => {
-            if friction.as_ref().is_some_and(|f| !f.is_empty()) || gravity.as_ref().is_some_and(|g| g.is_some()) {
-                bail!(
-                    "--ideal takes no weights files: it computes the arm's true torques (--friction and --gravity alone choose the parts)"
-                );
-            }
-            let arm = load_config(config)?.arm;
-            let n = arm.dof();
-            let (enable_friction, enable_gravity) = match (friction.is_some(), gravity.is_some()) {
-                (false, false) => (true, true),
-                chosen => chosen,
-            };
-            let identifier = identifier_for(name, &output, "IdealCompensator");
-            let model = ModelSpec::IdealCompensator(IdealCompensatorSpec { arm, enable_friction, enable_gravity });
-            export(FmuSpec { identifier, model }, &[], &output, n)?;
+            ideal_compensator(friction, gravity, config, name, &output, &target)?;
         }
         Export::Compensator { friction, gravity, ideal: false, adaptive, config: _, name, output } => {
-            let friction = friction.unwrap_or_default();
-            let gravity = gravity.flatten();
-            let identifier = identifier_for(name, &output, if adaptive { "AdaptiveCompensator" } else { "NnCompensator" });
-            if friction.is_empty() && gravity.is_none() {
-                bail!("give --friction nets, a --gravity net, or both (or --ideal for the arm's true torques)");
-            }
-            // Checked here, by the user's file names, before anything is packed.
-            let friction_files = friction.iter().map(|p| WeightsFile::read(p)).collect::<Result<Vec<_>, _>>()?;
-            let gravity_file = gravity.as_ref().map(|g| WeightsFile::read(g)).transpose()?;
-            let names: Vec<String> = friction.iter().chain(&gravity).map(|p| p.display().to_string()).collect();
-            let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(&friction_files).collect();
-            let joints =
-                neurarm_models::check_compensator_nets(&named, names.get(friction.len()).map(String::as_str).zip(gravity_file.as_ref()))
-                    .map_err(anyhow::Error::msg)?;
-            for (name, file) in names.iter().zip(friction_files.iter().chain(&gravity_file)) {
-                if file.kind == NetKind::Unspecified {
-                    eprintln!("notice: {name} records no kind (trained before weights version 3, or with --kind unspecified): checked by its shape and names only");
-                }
-            }
-            let mut sources: Vec<(String, PathBuf)> =
-                friction.iter().enumerate().map(|(i, p)| (format!("friction_{}.json", i + 1), p.clone())).collect();
-            if let Some(g) = &gravity {
-                sources.push(("gravity.json".into(), g.clone()));
-            }
-            let spec = NnCompensatorSpec::of_nets(
-                joints,
-                (1..=friction.len()).map(|i| format!("friction_{i}.json")).collect(),
-                gravity.as_ref().map(|_| "gravity.json".to_owned()),
-            );
-            let model = if adaptive {
-                ModelSpec::AdaptiveCompensator(spec.adaptive(AdaptationLaw::default()))
-            } else {
-                ModelSpec::NnCompensator(spec)
-            };
-            export(FmuSpec { identifier, model }, &sources, &output, joints)?;
+            nn_compensator(friction.unwrap_or_default(), gravity.flatten(), adaptive, name, &output, &target)?;
         }
         Export::Controller(Controller::TaskSpace { config, kp, kd, null_damping, centre, scale, name, output }) => {
-            let arm = load_config(config)?.arm;
-            let n = arm.dof();
-            if n < 2 {
-                bail!("task-space control of a planar position needs at least 2 joints; the arm has {n}");
-            }
-            let mut placement = ReferencePlacement::for_arm(&arm);
-            if let Some(c) = centre {
-                let [x, y] = c[..] else { bail!("--centre takes two numbers, x,y [m]; got {}", c.len()) };
-                placement.centre = nalgebra::Vector2::new(x, y);
-            }
-            if let Some(s) = scale {
-                placement.scale = s;
-            }
-            let start = neurarm::experiments::tracking_start(&arm, &placement).map_err(anyhow::Error::msg)?;
-            let model = ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
-                model: arm.frictionless(),
-                gains: TaskSpaceGains { kp, kd, null_damping, ..TaskSpaceGains::default() },
-                centre: [placement.centre.x, placement.centre.y],
-                scale: placement.scale,
-                q_start: start.q,
-            });
-            let identifier = identifier_for(name, &output, "TaskSpaceController");
-            export(FmuSpec { identifier, model }, &[], &output, n)?;
+            task_space_controller(
+                config,
+                TaskSpaceGains { kp, kd, null_damping, ..TaskSpaceGains::default() },
+                centre,
+                scale,
+                name,
+                &output,
+                &target,
+            )?;
         }
         Export::Controller(Controller::Joint { config, joints, kp, kd, sequence, name, output }) => {
             let joints = match joints {
@@ -272,22 +208,127 @@ pub fn run(args: ExportArgs) -> Result<()> {
             };
             let identifier = identifier_for(name, &output, "JointController");
             let model = ModelSpec::JointController(JointControllerSpec { joints, kp, kd, use_sequence: sequence });
-            export(FmuSpec { identifier, model }, &[], &output, joints)?;
+            target.write(FmuSpec { identifier, model }, &[], &output, joints)?;
         }
     }
     Ok(())
 }
 
-/// Writes the FMU of `spec` and says so.
-fn write_fmu(
-    spec: FmuSpec,
-    sources: &[(String, PathBuf)],
-    output: &std::path::Path,
-    joints: usize,
-    platforms: Option<&[String]>,
-    version: FmiVersion,
+/// `export compensator --ideal`: the arm's true friction and gravity, the parts chosen by
+/// `--friction` and `--gravity` without files (both if neither is given).
+fn ideal_compensator(
+    friction: Option<Vec<PathBuf>>,
+    gravity: Option<Option<PathBuf>>,
+    config: Option<PathBuf>,
+    name: Option<String>,
+    output: &Path,
+    target: &Target<'_>,
 ) -> Result<()> {
-    export_fmu_as(&spec, sources, output, platforms, version).map_err(anyhow::Error::msg)?;
-    eprintln!("wrote {} ({}, {joints} joints, FMI {})", output.display(), spec.identifier, version.number());
-    Ok(())
+    if friction.as_ref().is_some_and(|f| !f.is_empty()) || gravity.as_ref().is_some_and(|g| g.is_some()) {
+        bail!("--ideal takes no weights files: it computes the arm's true torques (--friction and --gravity alone choose the parts)");
+    }
+    let arm = load_config(config)?.arm;
+    let n = arm.dof();
+    let (enable_friction, enable_gravity) = match (friction.is_some(), gravity.is_some()) {
+        (false, false) => (true, true),
+        chosen => chosen,
+    };
+    let identifier = identifier_for(name, output, "IdealCompensator");
+    let model = ModelSpec::IdealCompensator(IdealCompensatorSpec { arm, enable_friction, enable_gravity });
+    target.write(FmuSpec { identifier, model }, &[], output, n)
+}
+
+/// `export compensator` of nets: the friction nets of joints 1, 2, … and the gravity net,
+/// checked together by the user's file names before anything is packed; adapting with
+/// `--adaptive`.
+fn nn_compensator(
+    friction: Vec<PathBuf>,
+    gravity: Option<PathBuf>,
+    adaptive: bool,
+    name: Option<String>,
+    output: &Path,
+    target: &Target<'_>,
+) -> Result<()> {
+    let identifier = identifier_for(name, output, if adaptive { "AdaptiveCompensator" } else { "NnCompensator" });
+    if friction.is_empty() && gravity.is_none() {
+        bail!("give --friction nets, a --gravity net, or both (or --ideal for the arm's true torques)");
+    }
+    let friction_files = friction.iter().map(|p| WeightsFile::read(p)).collect::<Result<Vec<_>, _>>()?;
+    let gravity_file = gravity.as_ref().map(|g| WeightsFile::read(g)).transpose()?;
+    let names: Vec<String> = friction.iter().chain(&gravity).map(|p| p.display().to_string()).collect();
+    let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(&friction_files).collect();
+    // `check_compensator_nets` says what is wrong in words, naming the files.
+    let joints = neurarm_models::check_compensator_nets(&named, names.get(friction.len()).map(String::as_str).zip(gravity_file.as_ref()))
+        .map_err(anyhow::Error::msg)?;
+    for (name, file) in names.iter().zip(friction_files.iter().chain(&gravity_file)) {
+        if file.kind == NetKind::Unspecified {
+            eprintln!("notice: {name} records no kind (trained before weights version 3, or with --kind unspecified): checked by its shape and names only");
+        }
+    }
+    let mut sources: Vec<(String, PathBuf)> =
+        friction.iter().enumerate().map(|(i, p)| (format!("friction_{}.json", i + 1), p.clone())).collect();
+    if let Some(g) = &gravity {
+        sources.push(("gravity.json".into(), g.clone()));
+    }
+    let spec = NnCompensatorSpec::of_nets(
+        joints,
+        (1..=friction.len()).map(|i| format!("friction_{i}.json")).collect(),
+        gravity.as_ref().map(|_| "gravity.json".to_owned()),
+    );
+    let model =
+        if adaptive { ModelSpec::AdaptiveCompensator(spec.adaptive(AdaptationLaw::default())) } else { ModelSpec::NnCompensator(spec) };
+    target.write(FmuSpec { identifier, model }, &sources, output, joints)
+}
+
+/// `export controller task-space`: the curve placed for the arm of `config` (`centre` and
+/// `scale` overriding), the controller starting at the pose at the curve's start.
+fn task_space_controller(
+    config: Option<PathBuf>,
+    gains: TaskSpaceGains,
+    centre: Option<Vec<f64>>,
+    scale: Option<f64>,
+    name: Option<String>,
+    output: &Path,
+    target: &Target<'_>,
+) -> Result<()> {
+    let arm = load_config(config)?.arm;
+    let n = arm.dof();
+    if n < 2 {
+        bail!("task-space control of a planar position needs at least 2 joints; the arm has {n}");
+    }
+    let mut placement = ReferencePlacement::for_arm(&arm);
+    if let Some(c) = centre {
+        let [x, y] = c[..] else { bail!("--centre takes two numbers, x,y [m]; got {}", c.len()) };
+        placement.centre = nalgebra::Vector2::new(x, y);
+    }
+    if let Some(s) = scale {
+        placement.scale = s;
+    }
+    // `tracking_start` (the experiments') says what is wrong in words.
+    let start = neurarm::experiments::tracking_start(&arm, &placement).map_err(anyhow::Error::msg)?;
+    let model = ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
+        model: arm.frictionless(),
+        gains,
+        centre: [placement.centre.x, placement.centre.y],
+        scale: placement.scale,
+        q_start: start.q,
+    });
+    let identifier = identifier_for(name, output, "TaskSpaceController");
+    target.write(FmuSpec { identifier, model }, &[], output, n)
+}
+
+/// What every FMU of one `neurarm export` is written for: the platforms it carries and its FMI
+/// version.
+struct Target<'a> {
+    platforms: Option<&'a [String]>,
+    version: FmiVersion,
+}
+
+impl Target<'_> {
+    /// Writes the FMU of `spec` (of `joints` joints) and says so.
+    fn write(&self, spec: FmuSpec, sources: &[(String, PathBuf)], output: &Path, joints: usize) -> Result<()> {
+        export_fmu_as(&spec, sources, output, self.platforms, self.version)?;
+        eprintln!("wrote {} ({}, {joints} joints, FMI {})", output.display(), spec.identifier, self.version.number());
+        Ok(())
+    }
 }

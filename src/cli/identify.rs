@@ -79,7 +79,7 @@ pub fn run(command: IdentifyCommand) -> Result<()> {
     match command {
         IdentifyCommand::Friction { log, joint, columns, bin_width, window, drift, spread, inertia, output } => {
             let columns = columns.columns();
-            columns.check().map_err(anyhow::Error::msg)?;
+            columns.check()?;
             let options = neurarm::identify::FrictionOptions {
                 bin_width_rad_s: bin_width,
                 window_s: window,
@@ -88,27 +88,27 @@ pub fn run(command: IdentifyCommand) -> Result<()> {
                 inertia_kgm2: inertia,
                 ..Default::default()
             };
-            options.check().map_err(anyhow::Error::msg)?;
-            neurarm::logs::report_path(&output).map_err(anyhow::Error::msg)?;
+            options.check()?;
+            neurarm::logs::report_path(&output)?;
             let robot_log = neurarm::identify::RobotLog::read_joint(&log, &columns, joint)?;
-            let found = neurarm::identify::identify_friction_log(&robot_log, joint, &options).map_err(anyhow::Error::msg)?;
+            let found = neurarm::identify::identify_friction_log(&robot_log, joint, &options)?;
             eprint!("{}", neurarm::logs::friction_summary(joint, &found));
-            let report = neurarm::logs::write_friction_pairs(&output, joint, &found).map_err(anyhow::Error::msg)?;
+            let report = neurarm::logs::write_friction_pairs(&output, joint, &found)?;
             say_pairs_written(&output, found.pairs.len(), report.as_deref());
         }
         IdentifyCommand::Gravity { log, columns, friction, config, speed, window, output } => {
             let columns = columns.columns();
-            columns.check().map_err(anyhow::Error::msg)?;
+            columns.check()?;
             let options = neurarm::identify::GravityOptions { speed_rad_s: speed, window_s: window, ..Default::default() };
-            options.check().map_err(anyhow::Error::msg)?;
-            neurarm::logs::report_path(&output).map_err(anyhow::Error::msg)?;
+            options.check()?;
+            neurarm::logs::report_path(&output)?;
             let model = match config {
                 Some(c) => Some(ArmConfig::from_toml_file(&c)?.arm.with_base_angle(0.0).frictionless()),
                 None => None,
             };
             let mut curves = Vec::new();
             for (k, path) in friction.unwrap_or_default().iter().enumerate() {
-                let (joint, pairs) = neurarm::logs::read_friction_pairs(path).map_err(anyhow::Error::msg)?;
+                let (joint, pairs) = neurarm::logs::read_friction_pairs(path)?;
                 if joint != k + 1 {
                     bail!(
                         "--friction: {} holds joint {joint}'s pairs but is given as joint {}'s; give them in joint order",
@@ -120,9 +120,9 @@ pub fn run(command: IdentifyCommand) -> Result<()> {
             }
             let robot_log = neurarm::identify::RobotLog::read_all(&log, &columns, model.as_ref().map(|m| m.dof()))?;
             let correction = neurarm::identify::GravityCorrection { friction: &curves, model: model.as_ref() };
-            let found = neurarm::identify::identify_gravity_log(&robot_log, &options, &correction).map_err(anyhow::Error::msg)?;
+            let found = neurarm::identify::identify_gravity_log(&robot_log, &options, &correction)?;
             eprint!("{}", neurarm::logs::gravity_summary(&found));
-            let report = neurarm::logs::write_gravity_pairs(&output, &found).map_err(anyhow::Error::msg)?;
+            let report = neurarm::logs::write_gravity_pairs(&output, &found)?;
             say_pairs_written(&output, found.pairs.len(), report.as_deref());
         }
     }

@@ -71,9 +71,9 @@ pub fn run(command: PlanCommand) -> Result<()> {
             }
             settings.max_speed_rad_s = max_speed;
             settings.spacing_rad_s = spacing;
-            let plan = neurarm::plan::friction_plan(&arm, &settings).map_err(anyhow::Error::msg)?;
+            let plan = neurarm::plan::friction_plan(&arm, &settings)?;
             let instructions = plan.instructions(&source);
-            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &instructions).map_err(anyhow::Error::msg)?;
+            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &instructions)?;
             let what = format!("{} segments, {:.0} s", plan.segments.len(), plan.end_s);
             say_plan_written(&output, &what, notes.as_deref(), &instructions);
         }
@@ -87,9 +87,9 @@ pub fn run(command: PlanCommand) -> Result<()> {
                 (None, None) => neurarm::experiments::Settings::paper().design_for(n),
             };
             let settings = neurarm::plan::GravityPlanSettings { design, speed_rad_s: speed, pass_s: pass_time, seed };
-            let plan = neurarm::plan::gravity_plan(n, &settings).map_err(anyhow::Error::msg)?;
+            let plan = neurarm::plan::gravity_plan(n, &settings)?;
             let instructions = plan.instructions(&source, &settings);
-            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &instructions).map_err(anyhow::Error::msg)?;
+            let notes = neurarm::plan::write_plan(&output, &plan.to_csv(), &instructions)?;
             say_plan_written(&output, &format!("{} poses, {:.0} s", plan.poses, plan.end_s), notes.as_deref(), &instructions);
         }
     }

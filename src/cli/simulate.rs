@@ -69,7 +69,7 @@ pub fn run(args: SimulateArgs) -> Result<()> {
                         Interrupted(format!("interrupted at t = {t} s; the {} rows so far are in {}", run.rows, describe(&output))).into()
                     )
                 }
-                SystemRunEnd::Failed(e) => bail!("{e}\n(the {} rows recorded before the failure are in {})", run.rows, describe(&output)),
+                SystemRunEnd::Failed(failure) => return Err(FailedRun { failure, rows: run.rows, output: describe(&output) }.into()),
             }
         }
         SimulateArgs { plan: Some(plan), arm, output, step, every, base_angle, robot_log, .. } => {
@@ -107,11 +107,22 @@ pub fn run(args: SimulateArgs) -> Result<()> {
     Ok(())
 }
 
+/// A unit failed mid-run: the master's error, and where the rows recorded before it went. The
+/// message holds the master's, so it is kept here rather than as the source (which would print
+/// it twice).
+#[derive(Debug, thiserror::Error)]
+#[error("{failure}\n(the {rows} rows recorded before the failure are in {output})")]
+struct FailedRun {
+    failure: neurarm_cosim::MasterError,
+    rows: usize,
+    output: String,
+}
+
 /// Parses a discard policy for clap.
-fn parse_on_discard(text: &str) -> std::result::Result<neurarm_cosim::OnDiscard, String> {
+fn parse_on_discard(text: &str) -> Result<neurarm_cosim::OnDiscard> {
     match text {
         "stop" => Ok(neurarm_cosim::OnDiscard::Stop),
         "error" => Ok(neurarm_cosim::OnDiscard::Error),
-        _ => Err(format!("'{text}': use stop or error")),
+        _ => bail!("'{text}': use stop or error"),
     }
 }

@@ -137,7 +137,7 @@ fn train_from_csv(
     };
     let raw = matrix(inputs);
     neurarm_physics::nn::lm::check_settings(&settings, encoding.features(inputs.len()), targets.len(), table.rows())
-        .map_err(|e| anyhow::anyhow!("{}: {e}", data.display()))?;
+        .with_context(|| data.display().to_string())?;
     if let Some(warning) = neurarm_physics::nn::lm::time_series_warning(&raw) {
         eprintln!("warning: {}: {warning}", data.display());
     }
@@ -175,17 +175,18 @@ fn unit_of(name: &str) -> String {
 }
 
 /// Parses a damping rule for clap.
-fn parse_damping(text: &str) -> std::result::Result<Damping, String> {
+fn parse_damping(text: &str) -> Result<Damping> {
     match text.trim() {
         "trainlm" => Ok(Damping::Trainlm),
         "nielsen" => Ok(Damping::Nielsen),
-        other => Err(format!("unknown damping '{other}': use trainlm or nielsen")),
+        other => bail!("unknown damping '{other}': use trainlm or nielsen"),
     }
 }
 
 /// Parses a net kind for clap.
-fn parse_kind(text: &str) -> std::result::Result<NetKind, String> {
-    NetKind::parse(text)
+fn parse_kind(text: &str) -> Result<NetKind> {
+    // `NetKind::parse` says what is wrong in words.
+    NetKind::parse(text).map_err(anyhow::Error::msg)
 }
 
 /// A stop reason as words.

@@ -161,7 +161,8 @@ pub fn build_fmus(dir: &Path, arms: &Arms, settings: &Settings) -> Result<Fmus, 
     let n = arms.joints();
     let export = |id: &str, model: ModelSpec| -> Result<PathBuf, String> {
         let path = dir.join(format!("{id}.fmu"));
-        export_fmu_for(&FmuSpec { identifier: id.into(), model }, &[], &path, settings.platforms.as_deref())?;
+        export_fmu_for(&FmuSpec { identifier: id.into(), model }, &[], &path, settings.platforms.as_deref())
+            .map_err(|e| format!("{e:#}"))?;
         Ok(path)
     };
     let ArmState { q: q_start, .. } = tracking_start(&nominal.arm, &arms.placement)?;
@@ -225,7 +226,7 @@ pub fn export_nn_compensator(
         friction.iter().map(|(n, _)| n.clone()).collect(),
         gravity.map(|_| "gravity.json".to_owned()),
     ));
-    export_fmu_for(&FmuSpec { identifier: identifier.into(), model }, &sources, path, platforms)?;
+    export_fmu_for(&FmuSpec { identifier: identifier.into(), model }, &sources, path, platforms).map_err(|e| format!("{e:#}"))?;
     Ok(path.to_path_buf())
 }
 

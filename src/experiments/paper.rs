@@ -732,7 +732,7 @@ fn write_fmi3_twins(fmu_dir: &Path) -> Result<(), String> {
     fmus.sort();
     for fmu in fmus {
         let name = fmu.file_name().expect("a file from read_dir has a name");
-        crate::export::export_fmi3_twin(&fmu, &twins.join(name))?;
+        crate::export::export_fmi3_twin(&fmu, &twins.join(name)).map_err(|e| format!("{e:#}"))?;
     }
     Ok(())
 }
@@ -833,7 +833,8 @@ fn adaptation_runs(
     let real = &arms.real.arm;
     let export = |id: &str, model: ModelSpec, sources: &[(String, PathBuf)]| -> Result<PathBuf, String> {
         let path = fmu_dir.join(format!("{id}.fmu"));
-        export_fmu_for(&FmuSpec { identifier: id.into(), model }, sources, &path, settings.platforms.as_deref())?;
+        export_fmu_for(&FmuSpec { identifier: id.into(), model }, sources, &path, settings.platforms.as_deref())
+            .map_err(|e| format!("{e:#}"))?;
         Ok(path)
     };
     let ideal = |id: &str, arm: ArmParams, friction: bool| {

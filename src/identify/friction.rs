@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 use std::ops::Range;
 
+use anyhow::bail;
 use serde::Serialize;
 
 use super::RobotLog;
@@ -54,7 +55,7 @@ impl Default for FrictionOptions {
 
 impl FrictionOptions {
     /// Refuses options that make no sense, naming them.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> anyhow::Result<()> {
         let positive = [
             ("bin width", self.bin_width_rad_s),
             ("window", self.window_s),
@@ -64,14 +65,14 @@ impl FrictionOptions {
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(format!("the {name} must be a positive number (got {v})"));
+                bail!("the {name} must be a positive number (got {v})");
             }
         }
         if !(self.torque_tolerance_nm >= 0.0 && self.torque_tolerance_nm.is_finite()) {
-            return Err(format!("the torque tolerance must be >= 0 (got {})", self.torque_tolerance_nm));
+            bail!("the torque tolerance must be >= 0 (got {})", self.torque_tolerance_nm);
         }
         if let Some(h) = self.inertia_kgm2.filter(|h| !(*h >= 0.0 && h.is_finite())) {
-            return Err(format!("the inertia must be >= 0 kg·m² (got {h})"));
+            bail!("the inertia must be >= 0 kg·m² (got {h})");
         }
         Ok(())
     }
@@ -353,7 +354,7 @@ pub fn torque_levels(torque: &[f64], tolerance: f64) -> Vec<Range<usize>> {
 /// Identifies joint `joint`'s (1-based) friction from a log of constant-torque runs: the
 /// levels are the runs of constant `tau_joint` (see [`torque_levels`]), judged and binned by
 /// [`identify_levels`].
-pub fn identify_friction_log(log: &RobotLog, joint: usize, options: &FrictionOptions) -> Result<FrictionIdentification, String> {
+pub fn identify_friction_log(log: &RobotLog, joint: usize, options: &FrictionOptions) -> anyhow::Result<FrictionIdentification> {
     options.check()?;
     let j = log.joint_index(joint)?;
     let (speed, torque) = (&log.qd[j], &log.tau[j]);
@@ -367,13 +368,13 @@ pub fn identify_friction_log(log: &RobotLog, joint: usize, options: &FrictionOpt
     found.ignored_rows = short.iter().map(|r| r.len()).sum();
     if found.kept() == 0 {
         let moving = found.levels.iter().filter(|l| !matches!(l.verdict, Verdict::AtRest | Verdict::NoTorque)).count();
-        return Err(format!(
+        bail!(
             "{}: joint {joint}: no steady constant-torque level among the {} levels of the log ({moving} moved the joint; \
              a level needs at least {} s of constant torque and a steady speed at its end: see `neurarm plan friction`)",
             log.path.display(),
             found.levels.len(),
             options.window_s
-        ));
+        );
     }
     Ok(found)
 }

@@ -3,6 +3,7 @@
 //! averaged over a short window, and the two passes averaged. One implementation for logs and
 //! for the paper's own sweeps.
 
+use anyhow::bail;
 use serde::Serialize;
 
 use super::{FrictionCurve, RobotLog};
@@ -45,7 +46,7 @@ impl Default for GravityOptions {
 
 impl GravityOptions {
     /// Refuses options that make no sense, naming them.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> anyhow::Result<()> {
         for (name, v) in [
             ("pass speed", self.speed_rad_s),
             ("window", self.window_s),
@@ -53,14 +54,14 @@ impl GravityOptions {
             ("shortest pass", self.min_pass_s),
         ] {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(format!("the {name} must be a positive number (got {v})"));
+                bail!("the {name} must be a positive number (got {v})");
             }
         }
         if !(self.share > 0.0 && self.share < 1.0) {
-            return Err(format!("the speed share must lie between 0 and 1 (got {})", self.share));
+            bail!("the speed share must lie between 0 and 1 (got {})", self.share);
         }
         if !(self.smoothing_s >= 0.0 && self.smoothing_s.is_finite()) {
-            return Err(format!("the smoothing must be >= 0 s (got {})", self.smoothing_s));
+            bail!("the smoothing must be >= 0 s (got {})", self.smoothing_s);
         }
         Ok(())
     }
@@ -298,13 +299,42 @@ pub fn identify_gravity_log(
     log: &RobotLog,
     options: &GravityOptions,
     correction: &GravityCorrection<'_>,
-) -> Result<GravityIdentification, String> {
+) -> anyhow::Result<GravityIdentification> {
     options.check()?;
     let n = log.joints.len();
     if !correction.friction.is_empty() && correction.friction.len() != n {
-        return Err(format!("friction pairs of {} joints for a log of {n} joints", correction.friction.len()));
+        bail!("friction pairs of {} joints for a log of {n} joints", correction.friction.len());
     }
-    let rows = log.rows();
+    let passes = find_passes(log, options);
+    let partner = pair_passes(&passes);
+    let mut found = GravityIdentification { pairs: Vec::new(), poses: Vec::new(), passes: passes.len() };
+    for (a, pass) in passes.iter().enumerate() {
+        match partner[a] {
+            Some(b) if b < a => continue,
+            Some(b) => {
+                let (report, pair) = measure_pose(log, pass, &passes[b], options, correction);
+                found.poses.push(report);
+                found.pairs.extend(pair);
+            }
+            None => found.poses.push(one_way_pose(pass)),
+        }
+    }
+    if found.pairs.is_empty() {
+        bail!(
+            "{}: no pose passed both up and down at {} rad/s (±{:.0} %) by every joint ({} passes found): see `neurarm plan gravity`",
+            log.path.display(),
+            options.speed_rad_s,
+            100.0 * options.share,
+            passes.len()
+        );
+    }
+    Ok(found)
+}
+
+/// Each row's direction: 1 (or −1) when every joint's speed, averaged over the smoothing time,
+/// is within the share of +speed (−speed), else 0.
+fn pass_directions(log: &RobotLog, options: &GravityOptions) -> Vec<i8> {
+    let (n, rows) = (log.joints.len(), log.rows());
     // Moving averages of the speeds over the smoothing time, by prefix sums.
     let mut prefix = vec![vec![0.0; rows + 1]; n];
     for i in 0..n {
@@ -313,7 +343,7 @@ pub fn identify_gravity_log(
         }
     }
     let half = 0.5 * options.smoothing_s;
-    let state: Vec<i8> = (0..rows)
+    (0..rows)
         .map(|r| {
             let lo = log.time.partition_point(|&t| t < log.time[r] - half);
             let hi = log.time.partition_point(|&t| t <= log.time[r] + half);
@@ -331,7 +361,14 @@ pub fn identify_gravity_log(
                 0
             }
         })
-        .collect();
+        .collect()
+}
+
+/// The passes of `log`: stretches of one direction (see [`pass_directions`]) lasting at least
+/// the shortest pass.
+fn find_passes(log: &RobotLog, options: &GravityOptions) -> Vec<Pass> {
+    let (n, rows) = (log.joints.len(), log.rows());
+    let state = pass_directions(log, options);
     let mut passes = Vec::new();
     let mut start = 0;
     for r in 1..=rows {
@@ -349,7 +386,12 @@ pub fn identify_gravity_log(
             start = r;
         }
     }
-    // Pair each pass with the nearest unpaired pass of the other direction at the same pose.
+    passes
+}
+
+/// Each pass's partner: the nearest (in time) unpaired later pass of the other direction
+/// through common angles, taken in the order of the log.
+fn pair_passes(passes: &[Pass]) -> Vec<Option<usize>> {
     let mut partner: Vec<Option<usize>> = vec![None; passes.len()];
     for a in 0..passes.len() {
         if partner[a].is_some() {
@@ -364,59 +406,46 @@ pub fn identify_gravity_log(
             partner[b] = Some(a);
         }
     }
-    let mut found = GravityIdentification { pairs: Vec::new(), poses: Vec::new(), passes: passes.len() };
-    for a in 0..passes.len() {
-        match partner[a] {
-            Some(b) if b < a => continue,
-            Some(b) => {
-                let (up, down) = if passes[a].direction > 0.0 { (&passes[a], &passes[b]) } else { (&passes[b], &passes[a]) };
-                let pose: Vec<f64> = up.range.iter().zip(&down.range).map(|(x, y)| 0.5 * (x.0.max(y.0) + x.1.min(y.1))).collect();
-                let (up_window, up_s, up_miss) = window_at(log, up, &pose, options.window_s);
-                let (down_window, down_s, down_miss) = window_at(log, down, &pose, options.window_s);
-                let result = if up_miss.max(down_miss) > options.pose_tolerance_rad {
-                    Err(None)
-                } else {
-                    gravity_pair(&up_window, &down_window, options, correction).map_err(Some)
-                };
-                let pose = match &result {
-                    Ok(m) => m.q.clone(),
-                    Err(_) => passes[a].pose.clone(),
-                };
-                found.poses.push(PoseReport {
-                    q: pose,
-                    up_s: Some(up_s),
-                    down_s: Some(down_s),
-                    line: passes[a].line,
-                    refused: result.as_ref().err().map(|f| match f {
-                        Some(fault) => fault.reason().to_owned(),
-                        None => format!("the passes come no closer than {:.4} rad to a common pose", up_miss.max(down_miss)),
-                    }),
-                });
-                if let Ok(m) = result {
-                    found.pairs.push(m);
-                }
-            }
-            None => {
-                let p = &passes[a];
-                let (word, other) = if p.direction > 0.0 { ("up", "down") } else { ("down", "up") };
-                found.poses.push(PoseReport {
-                    q: p.pose.clone(),
-                    up_s: (p.direction > 0.0).then_some(p.middle_s),
-                    down_s: (p.direction < 0.0).then_some(p.middle_s),
-                    line: p.line,
-                    refused: Some(format!("passed {word} only: no {other} pass through these angles")),
-                });
-            }
-        }
+    partner
+}
+
+/// The pose of the paired passes `first` (the earlier) and `second`, measured in both passes'
+/// windows at the middle of their common angles: its report, and its pair unless refused.
+fn measure_pose(
+    log: &RobotLog,
+    first: &Pass,
+    second: &Pass,
+    options: &GravityOptions,
+    correction: &GravityCorrection<'_>,
+) -> (PoseReport, Option<GravityMeasurement>) {
+    let (up, down) = if first.direction > 0.0 { (first, second) } else { (second, first) };
+    let pose: Vec<f64> = up.range.iter().zip(&down.range).map(|(x, y)| 0.5 * (x.0.max(y.0) + x.1.min(y.1))).collect();
+    let (up_window, up_s, up_miss) = window_at(log, up, &pose, options.window_s);
+    let (down_window, down_s, down_miss) = window_at(log, down, &pose, options.window_s);
+    let result = if up_miss.max(down_miss) > options.pose_tolerance_rad {
+        Err(None)
+    } else {
+        gravity_pair(&up_window, &down_window, options, correction).map_err(Some)
+    };
+    let q = match &result {
+        Ok(m) => m.q.clone(),
+        Err(_) => first.pose.clone(),
+    };
+    let refused = result.as_ref().err().map(|f| match f {
+        Some(fault) => fault.reason().to_owned(),
+        None => format!("the passes come no closer than {:.4} rad to a common pose", up_miss.max(down_miss)),
+    });
+    (PoseReport { q, up_s: Some(up_s), down_s: Some(down_s), line: first.line, refused }, result.ok())
+}
+
+/// The report of a pose passed in one direction only: refused.
+fn one_way_pose(p: &Pass) -> PoseReport {
+    let (word, other) = if p.direction > 0.0 { ("up", "down") } else { ("down", "up") };
+    PoseReport {
+        q: p.pose.clone(),
+        up_s: (p.direction > 0.0).then_some(p.middle_s),
+        down_s: (p.direction < 0.0).then_some(p.middle_s),
+        line: p.line,
+        refused: Some(format!("passed {word} only: no {other} pass through these angles")),
     }
-    if found.pairs.is_empty() {
-        return Err(format!(
-            "{}: no pose passed both up and down at {} rad/s (±{:.0} %) by every joint ({} passes found): see `neurarm plan gravity`",
-            log.path.display(),
-            options.speed_rad_s,
-            100.0 * options.share,
-            passes.len()
-        ));
-    }
-    Ok(found)
 }

@@ -44,10 +44,10 @@ impl Default for LogColumns {
 
 impl LogColumns {
     /// Refuses a per-joint pattern without `{i}`.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> anyhow::Result<()> {
         for (what, p) in [("angle", &self.q), ("speed", &self.qd), ("torque", &self.tau)] {
             if !p.contains("{i}") {
-                return Err(format!("the {what} column pattern '{p}' has no {{i}} for the joint number"));
+                anyhow::bail!("the {what} column pattern '{p}' has no {{i}} for the joint number");
             }
         }
         Ok(())
@@ -152,11 +152,11 @@ impl RobotLog {
     }
 
     /// Where joint `joint` (from 1) is in the columns read, or an error naming the joints read.
-    pub fn joint_index(&self, joint: usize) -> Result<usize, String> {
+    pub fn joint_index(&self, joint: usize) -> Result<usize, TableError> {
         self.joints
             .iter()
             .position(|&j| j == joint)
-            .ok_or_else(|| format!("{}: joint {joint} is not in the log (joints read: {})", self.path.display(), list(&self.joints)))
+            .ok_or_else(|| table_error(&self.path, None, format!("joint {joint} is not in the log (joints read: {})", list(&self.joints))))
     }
 
     /// Number of rows.
