@@ -72,7 +72,7 @@ pub mod ssp;
 pub mod system;
 mod unit;
 
-pub use error::{DiscardedStep, MasterError};
+pub use error::{DescriptionError, DiscardedStep, FmuFileError, FmuProblem, MasterError};
 pub use interface::{BaseType, Causality, EnumerationInfo, FmiVersion, Initial, Interface, Variability, VariableInfo};
 pub use recording::{run, RunOutcome};
 pub use simulation::{Handle, RunEnd, Simulation};

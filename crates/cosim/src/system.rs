@@ -188,7 +188,7 @@ impl System {
         if self.units.iter().any(|u| u.name == name) {
             return Err(MasterError::new("two units have this name").unit(name));
         }
-        let interface = Interface::read(path).map_err(|e| MasterError::new(e).unit(name))?;
+        let interface = Interface::read(path).map_err(|e| MasterError::new(e.to_string()).unit(name))?;
         self.units.push(UnitPlan { name: name.to_owned(), path: path.to_owned(), interface });
         Ok(self)
     }
