@@ -1,11 +1,12 @@
 //! What went wrong, where and when.
 //!
 //! [`MasterError`] is the error of building, loading and running a system: it names the unit,
-//! the variable and the time. Reading an FMU's interface, the step before it, has its own
-//! ([`FmuFileError`], [`DescriptionError`]). Where one of them ends in a `MasterError` (adding
-//! a unit to a system, say), its text becomes the message.
+//! the variable and the time. The steps before it have their own: reading an FMU's interface
+//! ([`FmuFileError`], [`DescriptionError`]) and checking a system file ([`SpecError`],
+//! [`SystemFileError`]). Where one of them ends in a `MasterError` (adding a unit to a system,
+//! say), its text becomes the message.
 //!
-//! Each error's text already holds its cause's (the zip or XML error), so none returns it
+//! Each error's text already holds its cause's (the zip, XML or TOML error), so none returns it
 //! again from `source()`: a chain printed link by link says it once.
 
 use std::fmt;
@@ -84,6 +85,13 @@ impl fmt::Display for MasterError {
 }
 
 impl std::error::Error for MasterError {}
+
+impl From<SpecError> for MasterError {
+    /// A `[simulation]` table or an event that cannot run, as the master reports it.
+    fn from(e: SpecError) -> Self {
+        MasterError::new(e.to_string())
+    }
+}
 
 /// An FMU archive that cannot be read or unpacked: the file and why.
 #[derive(Debug, thiserror::Error)]
@@ -328,4 +336,73 @@ pub enum DescriptionError {
         /// The output it was given for.
         output: String,
     },
+}
+
+/// A `[simulation]` table or an event that cannot run.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SpecError {
+    /// Times or step out of range.
+    #[error("[simulation] needs a positive step and stop ≥ start (got start {start}, stop {stop}, step {step})")]
+    Span {
+        /// Start time [s].
+        start: f64,
+        /// Stop time [s].
+        stop: f64,
+        /// Communication step [s].
+        step: f64,
+    },
+    /// An event at no finite time.
+    #[error("an event's time must be finite, not {time}")]
+    EventTime {
+        /// The event's time [s].
+        time: f64,
+    },
+    /// A ramp that does not end at a finite time after its start.
+    #[error("the ramp from t = {time} s must end at a finite time after it, not until = {until}")]
+    RampEnd {
+        /// The ramp's start [s].
+        time: f64,
+        /// Its end as given [s].
+        until: f64,
+    },
+    /// An event that sets nothing.
+    #[error("the event at t = {time} s sets nothing: give set = {{ \"unit.variable\" = value }}")]
+    EmptyEvent {
+        /// The event's time [s].
+        time: f64,
+    },
+}
+
+/// A system file that cannot be read or written; `origin` names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SystemFileError {
+    /// Not TOML, or not a system file's fields.
+    #[error("{origin}: {}", .error.to_string().trim_end())]
+    Syntax {
+        /// The file.
+        origin: String,
+        /// The TOML reader's error.
+        error: toml::de::Error,
+    },
+    /// A `[simulation]` table that cannot run.
+    #[error("{origin}: {error}")]
+    Simulation {
+        /// The file.
+        origin: String,
+        /// What is wrong.
+        error: SpecError,
+    },
+    /// An `[[event]]` that cannot run.
+    #[error("{origin}: event {number}: {error}")]
+    Event {
+        /// The file.
+        origin: String,
+        /// The event's number in the file, from 1.
+        number: usize,
+        /// What is wrong.
+        error: SpecError,
+    },
+    /// The system cannot be written as TOML.
+    #[error("writing the system file: {0}")]
+    Write(toml::ser::Error),
 }

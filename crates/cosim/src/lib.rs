@@ -72,7 +72,7 @@ pub mod ssp;
 pub mod system;
 mod unit;
 
-pub use error::{DescriptionError, DiscardedStep, FmuFileError, FmuProblem, MasterError};
+pub use error::{DescriptionError, DiscardedStep, FmuFileError, FmuProblem, MasterError, SpecError, SystemFileError};
 pub use interface::{BaseType, Causality, EnumerationInfo, FmiVersion, Initial, Interface, Variability, VariableInfo};
 pub use recording::{run, RunOutcome};
 pub use simulation::{Handle, RunEnd, Simulation};

@@ -195,7 +195,7 @@ impl Simulation {
     fn set_value(&mut self, ui: usize, name: &str, value: &Value) -> Result<(), MasterError> {
         let plan = &self.system.units()[ui];
         let info = plan.variable(name)?;
-        let value = check_value(&plan.interface, info, value).map_err(|m| MasterError::new(m).unit(&plan.name).variable(name))?;
+        let value = check_value(&plan.interface, info, value).map_err(|e| e.unit(&plan.name).variable(name))?;
         let (vr, base) = ([info.value_reference], info.base);
         let unit = &mut self.units[ui];
         let mark = capture::mark();
@@ -341,7 +341,7 @@ impl Simulation {
                 e.message = format!("event {} (t = {} s): {}", k + 1, event.time, e.message);
                 e
             };
-            event.check().map_err(|m| at(MasterError::new(m)))?;
+            event.check().map_err(|e| at(e.into()))?;
             for (full, value) in &event.set {
                 let (u, v) = split_name(full).map_err(at)?;
                 let unit = self.system.unit_index(u).map_err(at)?;
@@ -360,7 +360,7 @@ impl Simulation {
                         _ => "only tunable parameters and unconnected inputs can change while running",
                     }));
                 }
-                check_value(&plan.interface, info, value).map_err(|m| fail(&m))?;
+                check_value(&plan.interface, info, value).map_err(|e| fail(&e.message))?;
                 if event.until.is_some() && info.base.access() != BaseType::Real {
                     return Err(fail("only a Real variable can be ramped"));
                 }

@@ -90,7 +90,7 @@ pub fn write_system(system: &System, simulation: &SimulationSpec, out: &Path) ->
 }
 
 fn write_with_events(system: &System, simulation: &SimulationSpec, events: &[EventSpec], out: &Path) -> Result<(), MasterError> {
-    simulation.check().map_err(MasterError::new)?;
+    simulation.check()?;
     system.recordable(&simulation.record)?;
     let system_name = out.file_stem().and_then(|s| s.to_str()).filter(|s| !s.is_empty()).unwrap_or("system").to_owned();
     let sources = sources(system)?;
@@ -101,7 +101,7 @@ fn write_with_events(system: &System, simulation: &SimulationSpec, events: &[Eve
             resources.push((u.path.clone(), source.clone()));
         }
     }
-    write_archive(out, &ssd, &resources).map_err(MasterError::new)
+    write_archive(out, &ssd, &resources)
 }
 
 /// The path in the archive of each unit's FMU, `resources/<file>.fmu`; units loaded from the
@@ -363,8 +363,8 @@ fn ssd_xml(system: &System, simulation: &SimulationSpec, events: &[EventSpec], s
 }
 
 /// Writes the zip to a temporary file beside `out`, then renames it over `out`.
-fn write_archive(out: &Path, ssd: &str, resources: &[(PathBuf, String)]) -> Result<(), String> {
-    let fail = |e: &dyn std::fmt::Display| format!("writing {}: {e}", out.display());
+fn write_archive(out: &Path, ssd: &str, resources: &[(PathBuf, String)]) -> Result<(), MasterError> {
+    let fail = |e: &dyn std::fmt::Display| MasterError::new(format!("writing {}: {e}", out.display()));
     let dir = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -381,9 +381,10 @@ fn write_archive(out: &Path, ssd: &str, resources: &[(PathBuf, String)]) -> Resu
     zip.start_file("SystemStructure.ssd", deflated).map_err(|e| fail(&e))?;
     zip.write_all(ssd.as_bytes()).map_err(|e| fail(&e))?;
     for (path, name) in resources {
-        let mut file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut file = std::fs::File::open(path).map_err(|e| MasterError::new(format!("{}: {e}", path.display())))?;
         zip.start_file(name.as_str(), stored).map_err(|e| fail(&e))?;
-        std::io::copy(&mut file, &mut zip).map_err(|e| format!("copying {} into {}: {e}", path.display(), out.display()))?;
+        std::io::copy(&mut file, &mut zip)
+            .map_err(|e| MasterError::new(format!("copying {} into {}: {e}", path.display(), out.display())))?;
     }
     zip.finish().map_err(|e| fail(&e))?.sync_all().map_err(|e| fail(&e))?;
     tmp.persist(out).map_err(|e| fail(&e.error))?;
