@@ -27,16 +27,19 @@ pub struct MasterError {
     pub message: String,
     /// Messages the FMU logged in the failing call.
     pub log: Vec<String>,
-    /// Set when the unit discarded a step (`fmi2Discard`) rather than failed.
+    /// Set when the unit discarded a step (`fmi2Discard`, `fmi3Discard`) rather than failed.
     pub discard: Option<Box<DiscardedStep>>,
 }
 
-/// What a unit said when it discarded a step (`fmi2DoStep` returned `fmi2Discard`).
+/// What a unit said when it discarded a step (`fmi2DoStep` returned `fmi2Discard`, or
+/// `fmi3DoStep` `fmi3Discard`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct DiscardedStep {
-    /// `fmi2LastSuccessfulTime` [s], if the unit could say.
+    /// `fmi2LastSuccessfulTime` (FMI 3.0: `fmi3DoStep`'s `lastSuccessfulTime`) [s], if the unit
+    /// could say.
     pub last_successful_time: Option<f64>,
-    /// `fmi2Terminated`: the unit asks to end the simulation, if it could say.
+    /// `fmi2Terminated` (FMI 3.0: `terminateSimulation`): the unit asks to end the simulation,
+    /// if it could say.
     pub terminated: Option<bool>,
 }
 

@@ -8,8 +8,10 @@
 //! whose outputs only *look* circular at the level of units (`a.y1` → `b.u`, `b.y` → `a.u2`,
 //! with `a.y1` not depending on `a.u2`) are not a loop. The outputs are read in a topological
 //! order of this graph, grouped into *passes*: consecutive outputs of one unit read in one
-//! `fmi2Get*` call per type, each passed on with one `fmi2Set*` call per target and type. A
-//! unit can have several passes (`a.y1` before `b`, `a.y2` after it).
+//! get call per access class (`fmi2GetReal`, ...; `fmi3GetFloat64`, ... when every value
+//! reference is of that one type, else one call per variable), each passed on with one set
+//! call per target and class. A unit can have several passes (`a.y1` before `b`, `a.y2` after
+//! it).
 //!
 //! # Stepping order (Gauss–Seidel)
 //! Topological over the connections between units; a cycle is cut at its first unit (in

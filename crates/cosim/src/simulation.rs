@@ -24,7 +24,8 @@
 //!   is shortened to end there, if every unit can handle a variable communication step
 //!   (`canHandleVariableCommunicationStepSize`); if one cannot, the run ends at the last whole
 //!   step before the stop time and a notice ([`Simulation::notices`]) says which unit;
-//! - a unit that discards a step (`fmi2Discard`, e.g. a model that reached its own end)
+//! - a unit that discards a step (`fmi2Discard`, `fmi3Discard`; e.g. a model that reached its
+//!   own end)
 //!   ends the run at the last communication point every unit completed, which is the last
 //!   recorded one; with [`OnDiscard::Error`] it is an error instead;
 //! - an interrupt flag ([`Simulation::interrupt_on`]) ends it at the next communication point.

@@ -28,7 +28,7 @@ impl Algorithm {
     }
 }
 
-/// What a unit that discards a step (`fmi2Discard`) does to a run.
+/// What a unit that discards a step (`fmi2Discard`, `fmi3Discard`) does to a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OnDiscard {

@@ -21,7 +21,8 @@
 //!   `ssd:ParameterBindings` with one inline `ssv:ParameterSet` named after the system, under
 //!   the FMU's own variable names (`q0_1`, not `arm.q0_1`). Bindings on the components are
 //!   what every engine applies; libcosim, for one, ignores a system-level binding. An
-//!   enumeration's value is written as `ssv:Integer` (FMI 2 sets it as an integer).
+//!   enumeration's value is written as `ssv:Integer` (FMI 2.0 sets it as an fmi2Integer, FMI
+//!   3.0 as an Int64).
 //! - `ssd:Connections`, one per output → input pair, `*` patterns expanded by
 //!   [`System::connect`].
 //! - `ssd:DefaultExperiment` with the start and stop time. SSP 1.0 has no place for the
@@ -153,8 +154,9 @@ fn xs_double(x: f64) -> String {
     }
 }
 
-/// The `ssv:` element and value text of a parameter of type `base`. An FMI 2 enumeration is
-/// set as an integer (`fmi2SetInteger`), and an ssv:Enumeration would need its item's name.
+/// The `ssv:` element and value text of a parameter of type `base`. An enumeration is set as
+/// an integer (`fmi2SetInteger`, `fmi3SetInt64`), and an ssv:Enumeration would need its item's
+/// name.
 fn parameter_value(base: BaseType, value: &Value) -> (&'static str, String) {
     match (base, value) {
         (b, Value::Integer(i)) if b.access() == BaseType::Real => ("ssv:Real", xs_double(*i as f64)),
@@ -470,7 +472,7 @@ mod tests {
         assert_eq!(parameter_value(BaseType::Real, &Value::Integer(-2)), ("ssv:Real", "-2.0".into()));
         assert_eq!(parameter_value(BaseType::Real, &Value::Real(0.5)), ("ssv:Real", "0.5".into()));
         assert_eq!(parameter_value(BaseType::Integer, &Value::Integer(7)), ("ssv:Integer", "7".into()));
-        // FMI 2 sets an enumeration as an integer; libcosim reads no ssv:Enumeration.
+        // FMI 2.0 and 3.0 set an enumeration as an integer; libcosim reads no ssv:Enumeration.
         assert_eq!(parameter_value(BaseType::Enumeration, &Value::Integer(3)), ("ssv:Integer", "3".into()));
         assert_eq!(parameter_value(BaseType::Boolean, &Value::Boolean(false)), ("ssv:Boolean", "false".into()));
         assert_eq!(parameter_value(BaseType::String, &Value::String("a".into())), ("ssv:String", "a".into()));
