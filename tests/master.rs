@@ -175,10 +175,13 @@ record = ["int.y"]
 
 #[test]
 fn bad_system_files_are_refused_with_the_reason() {
-    let e = SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\n[simulation]\nstop = 1\nstep = -1\n", "s.toml").unwrap_err();
+    let e = SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\n[simulation]\nstop = 1\nstep = -1\n", "s.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("s.toml") && e.contains("positive step"), "{e}");
-    let e =
-        SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\nspeed = 3\n[simulation]\nstop = 1\nstep = 1\n", "s.toml").unwrap_err();
+    let e = SystemSpec::from_toml("[[fmu]]\nname = 'a'\npath = 'A.fmu'\nspeed = 3\n[simulation]\nstop = 1\nstep = 1\n", "s.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("speed"), "{e}");
 }
 

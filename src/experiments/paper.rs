@@ -926,7 +926,7 @@ fn write_loop_files(name: &str, purpose: &str, spec: &SystemSpec, systems_dir: &
     let toml = systems_dir.join(format!("{name}.toml"));
     let text = format!(
         "# The {name} loop of `neurarm paper`{purpose}; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
-        spec.to_toml()?
+        spec.to_toml().map_err(|e| e.to_string())?
     );
     write_text_atomic(&toml, &text).map_err(writing(&toml))?;
     neurarm_cosim::ssp::write_ssp(spec, systems_dir, &out.join(format!("{name}.ssp"))).map_err(|e| e.to_string())

@@ -11,7 +11,8 @@
 //! outputs and inputs it joins. The same `System` is then simulated
 //! ([`System::initialize`], [`Simulation`]) or written as an SSP 1.0 archive that other
 //! engines read ([`ssp`]). Errors ([`MasterError`]) name the unit, the variable, the time and
-//! what the FMU itself logged.
+//! what the FMU itself logged; reading an FMU ([`FmuFileError`]) and a system file
+//! ([`SystemFileError`]) have errors of their own ([`error`]).
 //!
 //! System files ([`SystemSpec`], TOML) describe the same: `[[fmu]]` entries, `[[connection]]`
 //! entries and a `[simulation]` table; [`run`] runs one and keeps the rows recorded before a
@@ -72,7 +73,7 @@ pub mod ssp;
 pub mod system;
 mod unit;
 
-pub use error::{DiscardedStep, MasterError};
+pub use error::{DescriptionError, DiscardedStep, FmuFileError, FmuProblem, MasterError, SpecError, SystemFileError};
 pub use interface::{BaseType, Causality, EnumerationInfo, FmiVersion, Initial, Interface, Variability, VariableInfo};
 pub use recording::{run, RunOutcome};
 pub use simulation::{Handle, RunEnd, Simulation};

@@ -8,8 +8,10 @@
 //! whose outputs only *look* circular at the level of units (`a.y1` → `b.u`, `b.y` → `a.u2`,
 //! with `a.y1` not depending on `a.u2`) are not a loop. The outputs are read in a topological
 //! order of this graph, grouped into *passes*: consecutive outputs of one unit read in one
-//! `fmi2Get*` call per type, each passed on with one `fmi2Set*` call per target and type. A
-//! unit can have several passes (`a.y1` before `b`, `a.y2` after it).
+//! get call per access class (`fmi2GetReal`, ...; `fmi3GetFloat64`, ... when every value
+//! reference is of that one type, else one call per variable), each passed on with one set
+//! call per target and class. A unit can have several passes (`a.y1` before `b`, `a.y2` after
+//! it).
 //!
 //! # Stepping order (Gauss–Seidel)
 //! Topological over the connections between units; a cycle is cut at its first unit (in
@@ -205,22 +207,80 @@ fn step_order(system: &System) -> Vec<usize> {
     order
 }
 
+/// The ordered nodes grouped into passes: a node joins the pass before it when it is of the
+/// same unit and depends on none of that pass's nodes.
+fn group_into_passes(order: &[usize], nodes: &[Node], edges: &[Vec<usize>]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for &i in order {
+        match groups.last_mut() {
+            Some(g) if nodes[g[0]].0 == nodes[i].0 && !g.iter().any(|&j| edges[j].contains(&i)) => g.push(i),
+            _ => groups.push(vec![i]),
+        }
+    }
+    groups
+}
+
+/// The pass reading the outputs of nodes `group` (of one unit) and passing them on over every
+/// link from them; `pass_of_node` gives each node's pass, for the passes a transfer wakes.
+fn build_pass(system: &System, nodes: &[Node], group: &[usize], pass_of_node: &[usize]) -> Pass {
+    let unit = nodes[group[0]].0;
+    let interface = &system.units()[unit].interface;
+    let mut pass = Pass { unit, reads: Default::default(), transfers: Vec::new() };
+    for &i in group {
+        let v = &interface.variables[nodes[i].1];
+        pass.reads[slot(v.base)].push(v.value_reference);
+    }
+    for l in system.links().iter().filter(|l| l.from_unit == unit && group.iter().any(|&i| nodes[i].1 == l.from_index)) {
+        let s = slot(l.base);
+        let k = pass.reads[s].iter().position(|&vr| vr == l.from_vr).expect("read above");
+        let base = l.base.access();
+        let t = match pass.transfers.iter().position(|t| t.to == l.to_unit && t.base == base) {
+            Some(t) => t,
+            None => {
+                pass.transfers.push(Transfer { base, to: l.to_unit, vrs: Vec::new(), from: Vec::new(), wakes: Vec::new() });
+                pass.transfers.len() - 1
+            }
+        };
+        let t = &mut pass.transfers[t];
+        t.vrs.push(l.to_vr);
+        t.from.push(k);
+        // Passes of the target holding outputs that depend on this input.
+        let target = &system.units()[l.to_unit].interface;
+        for (j, &(u, index)) in nodes.iter().enumerate() {
+            if u == l.to_unit && target.variables[index].direct_inputs.contains(&l.to_index) && !t.wakes.contains(&pass_of_node[j]) {
+                t.wakes.push(pass_of_node[j]);
+            }
+        }
+    }
+    pass
+}
+
+/// What each pass reaches, as sorted step positions: its targets, and what the passes it
+/// wakes reach (later in the order, so computed first going backwards).
+fn reach(passes: &[Pass], step_position: &[usize]) -> Vec<Vec<usize>> {
+    let mut reach: Vec<Vec<usize>> = vec![Vec::new(); passes.len()];
+    for p in (0..passes.len()).rev() {
+        let mut r: Vec<usize> = Vec::new();
+        for t in &passes[p].transfers {
+            r.push(step_position[t.to]);
+            for &q in &t.wakes {
+                r.extend_from_slice(&reach[q]);
+            }
+        }
+        r.sort_unstable();
+        r.dedup();
+        reach[p] = r;
+    }
+    reach
+}
+
 impl Schedule {
     /// The schedule of `system`; fails on an algebraic loop.
     pub fn new(system: &System) -> Result<Self, MasterError> {
         let n = system.units().len();
         let (nodes, edges) = dependency_graph(system);
         let order = resolve_order(system, &nodes, &edges)?;
-
-        // Group the ordered nodes into passes: a node joins the pass before it when it is of
-        // the same unit and depends on none of that pass's nodes.
-        let mut groups: Vec<Vec<usize>> = Vec::new();
-        for &i in &order {
-            match groups.last_mut() {
-                Some(g) if nodes[g[0]].0 == nodes[i].0 && !g.iter().any(|&j| edges[j].contains(&i)) => g.push(i),
-                _ => groups.push(vec![i]),
-            }
-        }
+        let groups = group_into_passes(&order, &nodes, &edges);
         let mut pass_of_node = vec![0; nodes.len()];
         for (p, g) in groups.iter().enumerate() {
             for &i in g {
@@ -230,37 +290,8 @@ impl Schedule {
         let mut unit_passes = vec![Vec::new(); n];
         let mut passes: Vec<Pass> = Vec::with_capacity(groups.len());
         for (p, g) in groups.iter().enumerate() {
-            let unit = nodes[g[0]].0;
-            unit_passes[unit].push(p);
-            let interface = &system.units()[unit].interface;
-            let mut pass = Pass { unit, reads: Default::default(), transfers: Vec::new() };
-            for &i in g {
-                let v = &interface.variables[nodes[i].1];
-                pass.reads[slot(v.base)].push(v.value_reference);
-            }
-            for l in system.links().iter().filter(|l| l.from_unit == unit && g.iter().any(|&i| nodes[i].1 == l.from_index)) {
-                let s = slot(l.base);
-                let k = pass.reads[s].iter().position(|&vr| vr == l.from_vr).expect("read above");
-                let base = l.base.access();
-                let t = match pass.transfers.iter().position(|t| t.to == l.to_unit && t.base == base) {
-                    Some(t) => t,
-                    None => {
-                        pass.transfers.push(Transfer { base, to: l.to_unit, vrs: Vec::new(), from: Vec::new(), wakes: Vec::new() });
-                        pass.transfers.len() - 1
-                    }
-                };
-                let t = &mut pass.transfers[t];
-                t.vrs.push(l.to_vr);
-                t.from.push(k);
-                // Passes of the target holding outputs that depend on this input.
-                let target = &system.units()[l.to_unit].interface;
-                for (j, &(u, index)) in nodes.iter().enumerate() {
-                    if u == l.to_unit && target.variables[index].direct_inputs.contains(&l.to_index) && !t.wakes.contains(&pass_of_node[j])
-                    {
-                        t.wakes.push(pass_of_node[j]);
-                    }
-                }
-            }
+            let pass = build_pass(system, &nodes, g, &pass_of_node);
+            unit_passes[pass.unit].push(p);
             passes.push(pass);
         }
 
@@ -269,21 +300,7 @@ impl Schedule {
         for (i, &u) in step_order.iter().enumerate() {
             step_position[u] = i;
         }
-        // What each pass reaches: its targets, and what the passes it wakes reach (later in
-        // the order, so computed first going backwards).
-        let mut reach: Vec<Vec<usize>> = vec![Vec::new(); passes.len()];
-        for p in (0..passes.len()).rev() {
-            let mut r: Vec<usize> = Vec::new();
-            for t in &passes[p].transfers {
-                r.push(step_position[t.to]);
-                for &q in &t.wakes {
-                    r.extend_from_slice(&reach[q]);
-                }
-            }
-            r.sort_unstable();
-            r.dedup();
-            reach[p] = r;
-        }
+        let reach = reach(&passes, &step_position);
 
         let widest_read = |s: usize| passes.iter().map(|p| p.reads[s].len()).max().unwrap_or(0);
         let widest_set =

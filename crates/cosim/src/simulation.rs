@@ -24,7 +24,8 @@
 //!   is shortened to end there, if every unit can handle a variable communication step
 //!   (`canHandleVariableCommunicationStepSize`); if one cannot, the run ends at the last whole
 //!   step before the stop time and a notice ([`Simulation::notices`]) says which unit;
-//! - a unit that discards a step (`fmi2Discard`, e.g. a model that reached its own end)
+//! - a unit that discards a step (`fmi2Discard`, `fmi3Discard`; e.g. a model that reached its
+//!   own end)
 //!   ends the run at the last communication point every unit completed, which is the last
 //!   recorded one; with [`OnDiscard::Error`] it is an error instead;
 //! - an interrupt flag ([`Simulation::interrupt_on`]) ends it at the next communication point.
@@ -195,7 +196,7 @@ impl Simulation {
     fn set_value(&mut self, ui: usize, name: &str, value: &Value) -> Result<(), MasterError> {
         let plan = &self.system.units()[ui];
         let info = plan.variable(name)?;
-        let value = check_value(&plan.interface, info, value).map_err(|m| MasterError::new(m).unit(&plan.name).variable(name))?;
+        let value = check_value(&plan.interface, info, value).map_err(|e| e.unit(&plan.name).variable(name))?;
         let (vr, base) = ([info.value_reference], info.base);
         let unit = &mut self.units[ui];
         let mark = capture::mark();
@@ -341,7 +342,7 @@ impl Simulation {
                 e.message = format!("event {} (t = {} s): {}", k + 1, event.time, e.message);
                 e
             };
-            event.check().map_err(|m| at(MasterError::new(m)))?;
+            event.check().map_err(|e| at(e.into()))?;
             for (full, value) in &event.set {
                 let (u, v) = split_name(full).map_err(at)?;
                 let unit = self.system.unit_index(u).map_err(at)?;
@@ -360,7 +361,7 @@ impl Simulation {
                         _ => "only tunable parameters and unconnected inputs can change while running",
                     }));
                 }
-                check_value(&plan.interface, info, value).map_err(|m| fail(&m))?;
+                check_value(&plan.interface, info, value).map_err(|e| fail(&e.message))?;
                 if event.until.is_some() && info.base.access() != BaseType::Real {
                     return Err(fail("only a Real variable can be ramped"));
                 }

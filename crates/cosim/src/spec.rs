@@ -5,6 +5,8 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::{SpecError, SystemFileError};
+
 /// How units are stepped within one communication step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -26,7 +28,7 @@ impl Algorithm {
     }
 }
 
-/// What a unit that discards a step (`fmi2Discard`) does to a run.
+/// What a unit that discards a step (`fmi2Discard`, `fmi3Discard`) does to a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OnDiscard {
@@ -123,17 +125,13 @@ pub struct EventSpec {
 
 impl EventSpec {
     /// Checks the times: finite, and for a ramp `until` after `time`.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), SpecError> {
         if !self.time.is_finite() {
-            return Err(format!("an event's time must be finite, not {}", self.time));
+            return Err(SpecError::EventTime { time: self.time });
         }
         match self.until {
-            Some(until) if !(until.is_finite() && until > self.time) => {
-                Err(format!("the ramp from t = {} s must end at a finite time after it, not until = {until}", self.time))
-            }
-            _ if self.set.is_empty() => {
-                Err(format!("the event at t = {} s sets nothing: give set = {{ \"unit.variable\" = value }}", self.time))
-            }
+            Some(until) if !(until.is_finite() && until > self.time) => Err(SpecError::RampEnd { time: self.time, until }),
+            _ if self.set.is_empty() => Err(SpecError::EmptyEvent { time: self.time }),
             _ => Ok(()),
         }
     }
@@ -193,33 +191,31 @@ fn one() -> u64 {
 
 impl SimulationSpec {
     /// Checks the time span and step: finite, a positive step, stop ≥ start.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), SpecError> {
         let valid = self.step > 0.0 && self.step.is_finite() && self.start.is_finite() && self.stop.is_finite() && self.stop >= self.start;
         if valid {
             Ok(())
         } else {
-            Err(format!(
-                "[simulation] needs a positive step and stop ≥ start (got start {}, stop {}, step {})",
-                self.start, self.stop, self.step
-            ))
+            Err(SpecError::Span { start: self.start, stop: self.stop, step: self.step })
         }
     }
 }
 
 impl SystemSpec {
     /// Parses a system file's text; `origin` names it in messages.
-    pub fn from_toml(text: &str, origin: &str) -> Result<Self, String> {
-        let spec: Self = toml::from_str(text).map_err(|e| format!("{origin}: {}", e.to_string().trim_end()))?;
-        spec.simulation.check().map_err(|e| format!("{origin}: {e}"))?;
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, SystemFileError> {
+        let origin = || origin.to_owned();
+        let spec: Self = toml::from_str(text).map_err(|error| SystemFileError::Syntax { origin: origin(), error })?;
+        spec.simulation.check().map_err(|error| SystemFileError::Simulation { origin: origin(), error })?;
         for (k, event) in spec.event.iter().enumerate() {
-            event.check().map_err(|e| format!("{origin}: event {}: {e}", k + 1))?;
+            event.check().map_err(|error| SystemFileError::Event { origin: origin(), number: k + 1, error })?;
         }
         Ok(spec)
     }
 
     /// The system file's text; [`SystemSpec::from_toml`] reads it back unchanged (reals
     /// are written in their shortest exact form).
-    pub fn to_toml(&self) -> Result<String, String> {
-        toml::to_string(self).map_err(|e| format!("writing the system file: {e}"))
+    pub fn to_toml(&self) -> Result<String, SystemFileError> {
+        toml::to_string(self).map_err(SystemFileError::Write)
     }
 }

@@ -82,10 +82,11 @@ pub(crate) fn split_name(full: &str) -> Result<(&str, &str), MasterError> {
 
 /// Checks that `value` fits variable `info` of `interface` and gives what is passed to the
 /// FMU: integers may set reals; an enumeration takes one of its items, by value or by name.
-pub(crate) fn check_value(interface: &Interface, info: &VariableInfo, value: &Value) -> Result<Value, String> {
+/// The error says why; the caller names the unit and the variable.
+pub(crate) fn check_value(interface: &Interface, info: &VariableInfo, value: &Value) -> Result<Value, MasterError> {
     if info.is_array || !info.base.is_connectable() {
         let what = if info.is_array { "an array".to_owned() } else { format!("a {}", info.base.name()) };
-        return Err(format!("the variable is {what}, which this master does not set"));
+        return Err(MasterError::new(format!("the variable is {what}, which this master does not set")));
     }
     let (base, class) = (info.base, info.base.access());
     let ok = matches!(
@@ -97,12 +98,12 @@ pub(crate) fn check_value(interface: &Interface, info: &VariableInfo, value: &Va
             | (BaseType::String, _, Value::String(_))
     );
     if !ok {
-        return Err(format!("type mismatch: the variable is {:?}, the value {value:?}", info.base));
+        return Err(MasterError::new(format!("type mismatch: the variable is {:?}, the value {value:?}", info.base)));
     }
     if let (Some((low, high)), Value::Integer(i)) = (base.integer_range(), value) {
         if base != BaseType::Enumeration && !(low..=high).contains(&i128::from(*i)) {
             let name = if base == BaseType::Integer { "an fmi2Integer".to_owned() } else { format!("a {}", base.name()) };
-            return Err(format!("{i} does not fit {name}"));
+            return Err(MasterError::new(format!("{i} does not fit {name}")));
         }
     }
     match (base, value) {
@@ -118,15 +119,15 @@ pub(crate) fn check_value(interface: &Interface, info: &VariableInfo, value: &Va
                 Some((_, v)) => Ok(Value::Integer(*v)),
                 None => {
                     let listed: Vec<String> = items.iter().map(|(n, v)| format!("{n} = {v}")).collect();
-                    Err(format!(
+                    Err(MasterError::new(format!(
                         "{value:?} is not an item of type {} ({})",
                         info.declared_type.as_deref().unwrap_or("?"),
                         listed.join(", ")
-                    ))
+                    )))
                 }
             }
         }
-        (BaseType::String, Value::String(s)) if s.contains('\0') => Err("a string holds a NUL byte".into()),
+        (BaseType::String, Value::String(s)) if s.contains('\0') => Err(MasterError::new("a string holds a NUL byte")),
         _ => Ok(value.clone()),
     }
 }
@@ -144,16 +145,16 @@ fn capturable(text: &str) -> bool {
 /// (sorted by name), mapped to the target name with the same part in place of its `*`; the
 /// captured part holds no `_` or `.` (and may be empty), so a pattern never captures a longer
 /// name (`arm.q_*` matches `q_1`, not `q_meas_1`). With no `*`, the one pair as given.
-/// `from` and `to` are the full names, for messages.
+/// `from` and `to` are the full names, for messages; the caller names the source unit.
 pub fn expand_connection<'a>(
     from: &str,
     to: &str,
     from_var: &str,
     to_var: &str,
     outputs: impl IntoIterator<Item = &'a str>,
-) -> Result<Vec<(String, String)>, String> {
+) -> Result<Vec<(String, String)>, MasterError> {
     if from_var.matches('*').count() > 1 || to_var.matches('*').count() > 1 {
-        return Err(format!("'{from}' → '{to}': a name holds at most one '*'"));
+        return Err(MasterError::new(format!("'{from}' → '{to}': a name holds at most one '*'")));
     }
     match (from_var.split_once('*'), to_var.split_once('*')) {
         (Some((fp, fs)), Some((tp, ts))) => {
@@ -165,12 +166,12 @@ pub fn expand_connection<'a>(
             names.sort_unstable();
             names.dedup();
             if names.is_empty() {
-                return Err(format!("no output matches '{from_var}' ('*' stands for a part without '_' or '.')"));
+                return Err(MasterError::new(format!("no output matches '{from_var}' ('*' stands for a part without '_' or '.')")));
             }
             Ok(names.into_iter().map(|n| (n.to_owned(), format!("{tp}{}{ts}", &n[fp.len()..n.len() - fs.len()]))).collect())
         }
         (None, None) => Ok(vec![(from_var.to_owned(), to_var.to_owned())]),
-        _ => Err(format!("'{from}' → '{to}': use '*' in both names or in neither")),
+        _ => Err(MasterError::new(format!("'{from}' → '{to}': use '*' in both names or in neither"))),
     }
 }
 
@@ -188,7 +189,7 @@ impl System {
         if self.units.iter().any(|u| u.name == name) {
             return Err(MasterError::new("two units have this name").unit(name));
         }
-        let interface = Interface::read(path).map_err(|e| MasterError::new(e).unit(name))?;
+        let interface = Interface::read(path).map_err(|e| MasterError::new(e.to_string()).unit(name))?;
         self.units.push(UnitPlan { name: name.to_owned(), path: path.to_owned(), interface });
         Ok(self)
     }
@@ -225,7 +226,7 @@ impl System {
     pub fn set(&mut self, unit: &str, variable: &str, value: Value) -> Result<&mut Self, MasterError> {
         let u = self.unit_index(unit)?;
         let info = self.units[u].variable(variable)?;
-        check_value(&self.units[u].interface, info, &value).map_err(|m| MasterError::new(m).unit(unit).variable(variable))?;
+        check_value(&self.units[u].interface, info, &value).map_err(|e| e.unit(unit).variable(variable))?;
         if !info.settable_before_initialization() {
             let what = info.causality.with_article();
             let why = match info.causality {
@@ -252,7 +253,7 @@ impl System {
         let (fu, fv) = split_name(from)?;
         let (tu, tv) = split_name(to)?;
         let (fi, ti) = (self.unit_index(fu)?, self.unit_index(tu)?);
-        let pairs = expand_connection(from, to, fv, tv, self.units[fi].interface.outputs()).map_err(|m| MasterError::new(m).unit(fu))?;
+        let pairs = expand_connection(from, to, fv, tv, self.units[fi].interface.outputs()).map_err(|e| e.unit(fu))?;
         // All pairs are checked before any is added, so a refused connection changes nothing.
         let mut added: Vec<Link> = Vec::with_capacity(pairs.len());
         let pattern = |mut e: MasterError| {
@@ -346,7 +347,7 @@ impl System {
     /// Builds a system from a spec; relative FMU paths are taken from `base`. The spec's
     /// recorded variables are checked too.
     pub fn from_spec(spec: &SystemSpec, base: &Path) -> Result<Self, MasterError> {
-        spec.simulation.check().map_err(MasterError::new)?;
+        spec.simulation.check()?;
         if spec.fmu.is_empty() {
             return Err(MasterError::new("the system has no FMU"));
         }
@@ -379,11 +380,11 @@ mod tests {
         let pairs = expand_connection("a.q_meas_*", "b.q_*", "q_meas_*", "q_*", outputs).unwrap();
         assert_eq!(pairs, owned(&[("q_meas_1", "q_1")]));
         let e = expand_connection("a.z*", "b.z*", "z*", "z*", outputs).unwrap_err();
-        assert!(e.contains("no output matches 'z*'"), "{e}");
+        assert!(e.message.contains("no output matches 'z*'"), "{e}");
         let e = expand_connection("a.q_*", "b.u", "q_*", "u", outputs).unwrap_err();
-        assert!(e.contains("in both names or in neither"), "{e}");
+        assert!(e.message.contains("in both names or in neither"), "{e}");
         let e = expand_connection("a.*_*", "b.*_*", "*_*", "*_*", outputs).unwrap_err();
-        assert!(e.contains("at most one '*'"), "{e}");
+        assert!(e.message.contains("at most one '*'"), "{e}");
         assert_eq!(expand_connection("a.y", "b.u", "y", "u", outputs).unwrap(), owned(&[("y", "u")]));
     }
 }

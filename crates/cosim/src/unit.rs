@@ -28,7 +28,7 @@ use fmi::traits::FmiImport;
 use quick_xml::escape::escape;
 
 use crate::capture;
-use crate::error::{DiscardedStep, MasterError};
+use crate::error::{DiscardedStep, FmuFileError, FmuProblem, MasterError};
 use crate::interface::{BaseType, FmiVersion};
 use crate::system::UnitPlan;
 
@@ -92,7 +92,7 @@ impl Unit {
         capture::install();
         let err = |m: String| MasterError::new(m).unit(&plan.name);
         let path = &plan.path;
-        let dir = unpack(path).map_err(|e| err(format!("cannot load {}: {e}", path.display())))?;
+        let dir = unpack(path).map_err(|e| err(e.to_string()))?;
         let interface = &plan.interface;
         let version = interface.fmi_version;
         if !interface.only_once_per_process {
@@ -427,18 +427,19 @@ fn binary_path(version: FmiVersion, model_identifier: &str) -> PathBuf {
 }
 
 /// The archive at `path` unpacked into a new temporary folder.
-fn unpack(path: &Path) -> Result<tempfile::TempDir, String> {
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let mut archive = zip::ZipArchive::new(file).map_err(|e| format!("it is not an FMU (not a zip archive: {e})"))?;
+fn unpack(path: &Path) -> Result<tempfile::TempDir, FmuFileError> {
+    let fail = |problem| FmuFileError { path: path.to_owned(), problem };
+    let file = std::fs::File::open(path).map_err(|e| fail(FmuProblem::Open(e)))?;
+    let mut archive = zip::ZipArchive::new(file).map_err(|e| fail(FmuProblem::NotZip(e)))?;
     let mut total: u64 = 0;
     for i in 0..archive.len() {
-        let entry = archive.by_index_raw(i).map_err(|e| e.to_string())?;
+        let entry = archive.by_index_raw(i).map_err(|e| fail(FmuProblem::Entry(e)))?;
         total = total.saturating_add(entry.size());
     }
     if total > MAX_UNPACKED_BYTES {
-        return Err(format!("it would unpack to {total} bytes, more than the {} GiB allowed", MAX_UNPACKED_BYTES >> 30));
+        return Err(fail(FmuProblem::TooLarge { total, limit_gib: MAX_UNPACKED_BYTES >> 30 }));
     }
-    let dir = tempfile::Builder::new().prefix("neurarm-cosim-").tempdir().map_err(|e| format!("temporary folder: {e}"))?;
-    archive.extract(dir.path()).map_err(|e| format!("unpacking: {e}"))?;
+    let dir = tempfile::Builder::new().prefix("neurarm-cosim-").tempdir().map_err(|e| fail(FmuProblem::TempDir(e)))?;
+    archive.extract(dir.path()).map_err(|e| fail(FmuProblem::Unpack(e)))?;
     Ok(dir)
 }

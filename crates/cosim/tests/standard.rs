@@ -2,15 +2,15 @@
 //! `neurarm-test-fmus` (on the export layer, nothing of neurarm's robotics): a unit that discards
 //! a step, outputs that depend on separate inputs, a stop time that is not a whole number of
 //! steps, a unit that cannot vary its step, outputs with settable start values,
-//! enumerations and strings, and an interrupted run.
+//! enumerations and strings, an interrupted run, and the error of a failed one.
 //! Needs the test FMUs' library: `cargo build --release -p neurarm-test-fmus` (scripts/test does).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use neurarm_cosim::{run, Algorithm, BaseType, FmuEntry, OnDiscard, RunEnd, SimulationSpec, System, SystemSpec, Value};
-use neurarm_test_fmus::{fmu_in, TestModel};
+use neurarm_cosim::{run, Algorithm, BaseType, EventSpec, FmuEntry, OnDiscard, RunEnd, SimulationSpec, System, SystemSpec, Value};
+use neurarm_test_fmus::{fmu3_in, fmu_in, TestModel};
 
 fn fmu(dir: &Path, model: TestModel) -> PathBuf {
     fmu_in(dir, model).expect("test FMU packaged")
@@ -348,4 +348,35 @@ fn enumerations_are_written_to_ssp_with_their_types() {
     assert!(ssd.contains(r#"<ssc:Item name="square" value="2"/>"#), "{ssd}");
     let binding = &ssd[ssd.find(r#"<ssv:Parameter name="shape">"#).expect("bound")..];
     assert!(binding.starts_with("<ssv:Parameter name=\"shape\">\n") && binding.contains(r#"<ssv:Integer value="2"/>"#), "{binding}");
+}
+
+/// A run that fails mid-way says where: the unit, the variable when one is concerned, and the
+/// communication point, in the fields and in the text.
+#[test]
+fn a_failed_step_names_the_unit_the_variable_and_the_time() {
+    let dir = tempfile::tempdir().unwrap();
+    for (version, split) in [("fmi2", fmu(dir.path(), TestModel::Split)), ("fmi3", fmu3_in(dir.path(), TestModel::Split).unwrap())] {
+        let mut s = System::new();
+        s.add_fmu("split", &split).unwrap();
+        let mut sim = s.initialize(0.0, 0.1, Algorithm::GaussSeidel, &names(&["split.y1"])).unwrap();
+        // NaN passes the master's type check; the FMU refuses it when the event sets it.
+        let nan = EventSpec { time: 0.5, until: None, set: [("split.k".to_owned(), Value::Real(f64::NAN))].into() };
+        sim.schedule(&[nan]).unwrap();
+        let e = sim.run_until(1.0).unwrap_err();
+        assert_eq!((e.unit.as_deref(), e.variable.as_deref(), e.time), (Some("split"), Some("k"), Some(0.5)), "{version}: {e:?}");
+        let text = e.to_string();
+        assert!(text.starts_with("FMU 'split', variable 'k' at t = 0.5 s: setting Real(NaN) refused: "), "{version}: {text}");
+        assert_eq!(sim.rows().len(), 5, "{version}: the rows up to the failing point are kept");
+    }
+
+    // A step that fails concerns no variable: the unit and the step's start time.
+    let counter = fmu(dir.path(), TestModel::Counter);
+    let mut s = System::new();
+    s.add_fmu("counter", &counter).unwrap();
+    let mut sim = s.initialize(0.0, 0.5, Algorithm::Jacobi, &[]).unwrap();
+    sim.on_discard(OnDiscard::Error);
+    let e = sim.run_until(10.0).unwrap_err();
+    assert_eq!((e.unit.as_deref(), e.variable.as_deref()), (Some("counter"), None), "{e:?}");
+    assert!(e.time.is_some_and(|t| (t - 9.0).abs() < 1e-9), "the step from 9 s reaches past stop_at = 8.8 s: {e:?}");
+    assert!(e.to_string().starts_with("FMU 'counter' at t = 9 s: "), "{e}");
 }
