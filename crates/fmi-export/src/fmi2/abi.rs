@@ -693,16 +693,16 @@ macro_rules! export_fmi2 {
                 unsafe { abi::serialized_fmu_state_size(c, s, size) }
             }
             #[no_mangle]
-            pub unsafe extern "C" fn fmi2SerializeFMUstate(c: Component, s: FmuState, out: *mut u8, size: usize) -> RawStatus {
+            pub unsafe extern "C" fn fmi2SerializeFMUstate(c: Component, s: FmuState, out: *mut c_char, size: usize) -> RawStatus {
                 // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
-                // on unchanged.
-                unsafe { abi::serialize_fmu_state(c, s, out, size) }
+                // on unchanged; its `fmi2Byte` buffer (a `char` array) is written as bytes.
+                unsafe { abi::serialize_fmu_state(c, s, out.cast::<u8>(), size) }
             }
             #[no_mangle]
-            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: Component, b: *const u8, size: usize, s: *mut FmuState) -> RawStatus {
+            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: Component, b: *const c_char, size: usize, s: *mut FmuState) -> RawStatus {
                 // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
-                // on unchanged.
-                unsafe { abi::deserialize_fmu_state(c, b, size, s) }
+                // on unchanged; its `fmi2Byte` buffer (a `char` array) is read as bytes.
+                unsafe { abi::deserialize_fmu_state(c, b.cast::<u8>(), size, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(

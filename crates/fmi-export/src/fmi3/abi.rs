@@ -28,6 +28,13 @@ pub use crate::raw::FmuState;
 pub type RawStatus = c_int;
 /// `fmi3LogMessageCallback`: not variadic in FMI 3.0, the message is plain text.
 pub type LogMessage = unsafe extern "C" fn(*mut c_void, c_int, *const c_char, *const c_char);
+/// `fmi3IntermediateUpdateCallback`: never called (no intermediate update, no early return).
+pub type IntermediateUpdate = unsafe extern "C" fn(*mut c_void, f64, bool, bool, bool, bool, *mut bool, *mut f64);
+/// `fmi3ClockUpdateCallback`: never called (no Scheduled Execution).
+pub type ClockUpdate = unsafe extern "C" fn(*mut c_void);
+/// `fmi3LockPreemptionCallback` and `fmi3UnlockPreemptionCallback`: never called (no
+/// Scheduled Execution).
+pub type Preemption = unsafe extern "C" fn();
 
 /// The host's logger and environment, callable from the instance.
 struct HostLogger {
@@ -657,7 +664,10 @@ macro_rules! export_fmi3 {
         #[allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
         mod fmi3_exports {
             use std::ffi::{c_char, c_int, c_void};
-            use $crate::fmi3::abi::{self, Fmi3Instance, FmuState, LogMessage, RawStatus, CO_SIMULATION_ONLY, NO_EVENT_MODE};
+            use $crate::fmi3::abi::{
+                self, ClockUpdate, Fmi3Instance, FmuState, IntermediateUpdate, LogMessage, Preemption, RawStatus, CO_SIMULATION_ONLY,
+                NO_EVENT_MODE,
+            };
 
             #[no_mangle]
             pub extern "C" fn fmi3GetVersion() -> *const c_char {
@@ -696,7 +706,7 @@ macro_rules! export_fmi3 {
                 n_required: usize,
                 env: *mut c_void,
                 log: Option<LogMessage>,
-                _intermediate_update: *const c_void,
+                _intermediate_update: Option<IntermediateUpdate>,
             ) -> Fmi3Instance {
                 // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
                 // on unchanged with this library's factory; `intermediate_update` is never called.
@@ -726,9 +736,9 @@ macro_rules! export_fmi3 {
                 _logging_on: bool,
                 env: *mut c_void,
                 log: Option<LogMessage>,
-                _clock_update: *const c_void,
-                _lock: *const c_void,
-                _unlock: *const c_void,
+                _clock_update: Option<ClockUpdate>,
+                _lock: Option<Preemption>,
+                _unlock: Option<Preemption>,
             ) -> Fmi3Instance {
                 // SAFETY: `log` is NULL or the host's logger for `env` (the FMI 3.0 standard); nothing
                 // else is read.
@@ -819,10 +829,11 @@ macro_rules! export_fmi3 {
                 unsafe { abi::get_boolean(c, vr, n, v, nv) }
             }
             #[no_mangle]
-            pub unsafe extern "C" fn fmi3SetBoolean(c: Fmi3Instance, vr: *const u32, n: usize, v: *const u8, nv: usize) -> RawStatus {
+            pub unsafe extern "C" fn fmi3SetBoolean(c: Fmi3Instance, vr: *const u32, n: usize, v: *const bool, nv: usize) -> RawStatus {
                 // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
-                // on unchanged.
-                unsafe { abi::set_boolean(c, vr, n, v, nv) }
+                // on unchanged; the values are read as bytes, so a host's `bool` other than 0 or 1
+                // makes no invalid Rust `bool`.
+                unsafe { abi::set_boolean(c, vr, n, v.cast::<u8>(), nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetString(
