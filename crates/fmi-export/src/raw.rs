@@ -60,6 +60,46 @@ pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     }
 }
 
+/// Why an instantiate function of either API returns NULL: the text it logs, after the
+/// function's name.
+#[derive(Debug, thiserror::Error)]
+pub enum Refused {
+    /// No usable instance name; the payload is the version's rule.
+    #[error("the instance name is NULL, empty, white space only or not UTF-8 ({0})")]
+    Name(&'static str),
+    /// FMI 2.0: a model type other than co-simulation.
+    #[error("fmuType {0} requested, this FMU supports only fmi2CoSimulation (1)")]
+    FmuType(c_int),
+    /// FMI 3.0: event mode asked for.
+    #[error("eventModeUsed is true, but this FMU has no event mode (hasEventMode=\"false\")")]
+    EventMode,
+    /// The named string argument (GUID, instantiation token) is NULL or not UTF-8.
+    #[error("the {0} is NULL or not UTF-8")]
+    NullOrNotUtf8(&'static str),
+    /// The named string argument (resource location or path) is not UTF-8.
+    #[error("the {0} is not UTF-8")]
+    NotUtf8(&'static str),
+    /// FMI 2.0: the resource location names no local folder.
+    #[error(transparent)]
+    ResourceUri(#[from] crate::uri::ResourceUriError),
+    /// FMI 3.0: the instantiation token is not the model's.
+    #[error(
+        "instantiation token {given} does not match this FMU's {expected}: the modelDescription.xml and the binary or resources differ"
+    )]
+    WrongToken {
+        /// The token the host passed.
+        given: String,
+        /// The model's.
+        expected: String,
+    },
+    /// The instance refuses its arguments.
+    #[error(transparent)]
+    Instance(#[from] crate::instance::InstantiateError),
+    /// The model factory failed.
+    #[error("{0}")]
+    Model(crate::ModelError),
+}
+
 /// Logs that argument(s) `what` of `function` (an FMI 2.0 name) were NULL; `Error`.
 pub fn null_argument(instance: &Instance, function: &str, what: &str) -> Status {
     instance.error(&format!("{}: {what} is NULL", instance.api().name(function)))

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 
 use crate::instance::{Function, Instance, LogSink, Status};
 use crate::model::ModelFactory;
-use crate::raw::{self, catch_panic, slice, slice_mut, str_arg};
+use crate::raw::{self, catch_panic, slice, slice_mut, str_arg, Refused};
+use crate::uri::ResourceUriError;
 
 /// `fmi2Component`.
 pub type Component = *mut c_void;
@@ -94,7 +95,7 @@ impl raw::HoldsInstance for Wrapper {
 
 /// Turns a resource location URI into a folder path of this platform (which may not exist):
 /// the forms hosts pass on Unix and Windows, see [`crate::uri`].
-pub fn resource_folder(uri: &str) -> Result<PathBuf, String> {
+pub fn resource_folder(uri: &str) -> Result<PathBuf, ResourceUriError> {
     crate::uri::resource_path(uri, crate::uri::PathStyle::native()).map(PathBuf::from)
 }
 
@@ -124,36 +125,36 @@ pub unsafe fn instantiate(
     let name = unsafe { str_arg(instance_name) }.unwrap_or("");
     let host =
         |name: &str| HostLogger { logger, environment: functions.component_environment, name: CString::new(name).unwrap_or_default() };
-    let fail = |message: String| {
-        host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
+    let fail = |why: &dyn std::fmt::Display| {
+        host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {why}"));
         std::ptr::null_mut()
     };
-    let result = catch_panic(|| -> Result<Component, String> {
+    let result = catch_panic(|| -> Result<Component, Refused> {
         if instance_name.is_null() || name.trim().is_empty() {
-            return Err("the instance name is NULL, empty, white space only or not UTF-8 (FMI 2.0 asks for a non-empty name)".into());
+            return Err(Refused::Name("FMI 2.0 asks for a non-empty name"));
         }
         if fmu_type != FMI2_COSIMULATION {
-            return Err(format!("fmuType {fmu_type} requested, this FMU supports only fmi2CoSimulation (1)"));
+            return Err(Refused::FmuType(fmu_type));
         }
         // SAFETY: `guid` and `resource_location` are NULL or NUL-terminated strings of the host's,
         // valid for the call (this function's contract); both are read before it returns.
-        let guid = unsafe { str_arg(guid) }.ok_or("the GUID is NULL or not UTF-8")?;
+        let guid = unsafe { str_arg(guid) }.ok_or(Refused::NullOrNotUtf8("GUID"))?;
         // SAFETY: as for `guid`.
         let resources = match unsafe { str_arg(resource_location) } {
             Some(location) => Some(resource_folder(location)?),
             None if resource_location.is_null() => None,
-            None => return Err("the resource location is not UTF-8".into()),
+            None => return Err(Refused::NotUtf8("resource location")),
         };
-        let model = factory(resources.as_deref()).map_err(|e| e.to_string())?;
+        let model = factory(resources.as_deref()).map_err(Refused::Model)?;
         let sink_host = host(name);
         let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
-        let instance = Instance::new(name, guid, model, sink, logging_on != 0).map_err(|e| e.to_string())?;
+        let instance = Instance::new(name, guid, model, sink, logging_on != 0)?;
         Ok(Box::into_raw(Box::new(Wrapper { instance, strings: Vec::new() })) as Component)
     });
     match result {
         Ok(Ok(c)) => c,
-        Ok(Err(message)) => fail(message),
-        Err(why) => fail(format!("internal error ({why})")),
+        Ok(Err(refused)) => fail(&refused),
+        Err(why) => fail(&format_args!("internal error ({why})")),
     }
 }
 

@@ -14,8 +14,8 @@
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::PathBuf;
 
-use crate::instance::{Api, Function, Instance, LogSink, Status};
-use crate::raw::{self, catch_panic, slice, slice_mut, str_arg};
+use crate::instance::{Api, Function, Instance, InstantiateError, LogSink, Status};
+use crate::raw::{self, catch_panic, slice, slice_mut, str_arg, Refused};
 use crate::ModelFactory;
 
 use super::description::{Fmi3Type, Fmi3Variables};
@@ -148,44 +148,48 @@ pub unsafe fn instantiate_co_simulation(
     log_message: Option<LogMessage>,
 ) -> Fmi3Instance {
     let host = || HostLogger { logger: log_message, environment: instance_environment };
-    let fail = |message: String| {
-        host().log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {message}"));
+    let fail = |why: &dyn std::fmt::Display| {
+        host().log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {why}"));
         std::ptr::null_mut()
     };
-    let result = catch_panic(|| -> Result<Fmi3Instance, String> {
+    let result = catch_panic(|| -> Result<Fmi3Instance, Refused> {
         // SAFETY: `instance_name` is NULL or a NUL-terminated string of the host's, valid for the
         // call (this function's contract); the name is copied before the call returns.
         let name = unsafe { str_arg(instance_name) }.unwrap_or("");
         if name.trim().is_empty() {
-            return Err(
-                "the instance name is NULL, empty, white space only or not UTF-8 (FMI 3.0 asks for at least one other character)".into()
-            );
+            return Err(Refused::Name("FMI 3.0 asks for at least one other character"));
         }
         if event_mode_used {
-            return Err("eventModeUsed is true, but this FMU has no event mode (hasEventMode=\"false\")".into());
+            return Err(Refused::EventMode);
         }
         // SAFETY: `instantiation_token` and `resource_path` are NULL or NUL-terminated strings of
         // the host's, valid for the call (this function's contract); both are read before it returns.
-        let token = unsafe { str_arg(instantiation_token) }.ok_or("the instantiation token is NULL or not UTF-8")?;
+        let token = unsafe { str_arg(instantiation_token) }.ok_or(Refused::NullOrNotUtf8("instantiation token"))?;
         // SAFETY: as for `instantiation_token`.
         let resources = match unsafe { str_arg(resource_path) } {
             Some(path) => Some(PathBuf::from(path)),
             None if resource_path.is_null() => None,
-            None => return Err("the resource path is not UTF-8".into()),
+            None => return Err(Refused::NotUtf8("resource path")),
         };
-        let model = factory(resources.as_deref()).map_err(|e| e.to_string())?;
+        let model = factory(resources.as_deref()).map_err(Refused::Model)?;
         let variables = Fmi3Variables::new(model.description());
         let sink_host = host();
         let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
-        let instance = Instance::new(name, token, model, sink, logging_on)
-            .map_err(|e| e.to_string().replace("GUID", "instantiation token"))?
-            .with_api(Api::Fmi3);
+        let instance = Instance::new(name, token, model, sink, logging_on).map_err(in_fmi3_words)?.with_api(Api::Fmi3);
         Ok(Box::into_raw(Box::new(Wrapper { instance, variables, scratch: Vec::new(), strings: Vec::new() })) as Fmi3Instance)
     });
     match result {
         Ok(Ok(c)) => c,
-        Ok(Err(message)) => fail(message),
-        Err(why) => fail(format!("internal error ({why})")),
+        Ok(Err(refused)) => fail(&refused),
+        Err(why) => fail(&format_args!("internal error ({why})")),
+    }
+}
+
+/// An instance's refusal in FMI 3.0's words: the model's GUID is its instantiation token.
+fn in_fmi3_words(error: InstantiateError) -> Refused {
+    match error {
+        InstantiateError::WrongGuid { given, expected } => Refused::WrongToken { given, expected },
+        other => Refused::Instance(other),
     }
 }
 
