@@ -61,6 +61,7 @@ fn in_process(c: &mut Criterion) {
 fn through_abi(c: &mut Criterion) {
     let target =
         std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"));
+    // SAFETY: the library is this workspace's FMU binary, whose initialisers are Rust's own.
     let lib = unsafe { libloading::Library::new(target.join("release/libneurarm_fmu.so")) }
         .expect("build the FMU binary first: cargo build --release -p neurarm-fmu");
     let spec = FmuSpec::planar_arm("PlanarArm", ArmConfig::default());
@@ -71,6 +72,12 @@ fn through_abi(c: &mut Criterion) {
     let inputs: Vec<u32> = (1..=4).map(|i| vr(&format!("tau_{i}"))).collect();
     let outputs: Vec<u32> =
         ["q_1", "q_2", "q_3", "q_4", "qd_1", "qd_2", "qd_3", "qd_4", "x", "y", "xd", "yd"].iter().map(|n| vr(n)).collect();
+    // SAFETY: each symbol is read as a function type of the ABI the FMI 2.0 header gives it,
+    // and `lib` stays loaded until the function returns, after the last call. `callbacks`
+    // (a logger that reads nothing, a NULL environment) and the NUL-terminated strings outlive
+    // fmi2Instantiate; `inst` is used from there until fmi2FreeInstance only, one call at a
+    // time; every array passed holds the count passed with it (8 start values, 4 inputs, 12
+    // outputs) and outlives its call; `start` is a handle of `inst`.
     unsafe {
         let instantiate = *lib
             .get::<unsafe extern "C" fn(*const c_char, c_int, *const c_char, *const c_char, *const Callbacks, c_int, c_int) -> C>(

@@ -63,24 +63,22 @@ fn adapted_weights_restore_bit_identically_also_through_serialization() {
     let i = started(&fmu);
     run(&fmu, &i, 0, 300);
     let mut saved = std::ptr::null_mut();
-    assert_eq!(unsafe { (i.api.fmi2GetFMUstate)(i.c, &mut saved) }, OK);
+    assert_eq!(i.get_fmu_state(&mut saved), OK);
     let reference = run(&fmu, &i, 300, 500);
     assert!(reference[4..].iter().all(|&b| f64::from_bits(b) > 0.0), "every net adapted");
-    assert_eq!(unsafe { (i.api.fmi2SetFMUstate)(i.c, saved) }, OK);
+    assert_eq!(i.set_fmu_state(saved), OK);
     assert_eq!(run(&fmu, &i, 300, 500), reference);
     let mut size = 0;
-    assert_eq!(unsafe { (i.api.fmi2SerializedFMUstateSize)(i.c, saved, &mut size) }, OK);
+    assert_eq!(i.serialized_fmu_state_size(saved, &mut size), OK);
     let mut bytes = vec![0u8; size];
-    assert_eq!(unsafe { (i.api.fmi2SerializeFMUstate)(i.c, saved, bytes.as_mut_ptr(), size) }, OK);
+    assert_eq!(i.serialize_fmu_state(saved, &mut bytes), OK);
     let other = fmu.instance();
     let mut restored = std::ptr::null_mut();
-    assert_eq!(unsafe { (other.api.fmi2DeSerializeFMUstate)(other.c, bytes.as_ptr(), size, &mut restored) }, OK);
-    assert_eq!(unsafe { (other.api.fmi2SetFMUstate)(other.c, restored) }, OK);
+    assert_eq!(other.deserialize_fmu_state(&bytes, &mut restored), OK);
+    assert_eq!(other.set_fmu_state(restored), OK);
     assert_eq!(run(&fmu, &other, 300, 500), reference);
-    unsafe {
-        assert_eq!((i.api.fmi2FreeFMUstate)(i.c, &mut saved), OK);
-        assert_eq!((other.api.fmi2FreeFMUstate)(other.c, &mut restored), OK);
-    }
+    assert_eq!(i.free_fmu_state(&mut saved), OK);
+    assert_eq!(other.free_fmu_state(&mut restored), OK);
     // And a reset forgets what was learned: the run equals a fresh instance's.
     assert_eq!(i.reset(), OK);
     i.initialize();

@@ -16,6 +16,7 @@ fn arm_fmu() -> Fmu {
 #[test]
 fn reports_version_and_platform() {
     let fmu = arm_fmu();
+    // SAFETY: both functions take nothing and return a static NUL-terminated string.
     unsafe {
         assert_eq!(std::ffi::CStr::from_ptr((fmu.api.fmi2GetVersion)()).to_str().unwrap(), "2.0");
         assert_eq!(std::ffi::CStr::from_ptr((fmu.api.fmi2GetTypesPlatform)()).to_str().unwrap(), "default");
@@ -72,11 +73,8 @@ fn still_works(fmu: &Fmu, i: &Instance, phase: Phase) {
     if phase == Phase::Initialization {
         assert_eq!(i.exit(), OK, "{}", i.log.dump());
     }
-    let t = unsafe {
-        let mut t = f64::NAN;
-        assert_eq!((i.api.fmi2GetRealStatus)(i.c, 2, &mut t), OK);
-        t
-    };
+    let mut t = f64::NAN;
+    assert_eq!(i.get_real_status(2, &mut t), OK);
     assert_eq!(i.set_real(&[fmu.vr("tau_1")], &[2.0]), OK);
     assert_eq!(i.step(t, 1e-3), OK, "{}", i.log.dump());
     assert!(i.get_real(&[fmu.vr("qd_1")]).unwrap()[0] > 0.0);
@@ -99,33 +97,19 @@ fn illegal_call_table() {
         ("fmi2DoStep", vec![StepComplete], Box::new(|i| i.step(0.0, 1e-3))),
         ("fmi2GetReal", vec![Initialization, StepComplete, Terminated, Error], Box::new(move |i| i.get_real(&[q]).err().unwrap_or(OK))),
         ("fmi2SetReal", vec![Instantiated, Initialization, StepComplete], Box::new(move |i| i.set_real(&[tau], &[1.0]))),
-        (
-            "fmi2GetRealStatus",
-            vec![StepComplete, Terminated],
-            Box::new(|i| unsafe {
-                let mut t = 0.0;
-                (i.api.fmi2GetRealStatus)(i.c, 2, &mut t)
-            }),
-        ),
-        (
-            "fmi2GetBooleanStatus",
-            vec![StepComplete, Terminated],
-            Box::new(|i| unsafe {
-                let mut b = 7;
-                (i.api.fmi2GetBooleanStatus)(i.c, 3, &mut b)
-            }),
-        ),
+        ("fmi2GetRealStatus", vec![StepComplete, Terminated], Box::new(|i| i.get_real_status(2, &mut 0.0))),
+        ("fmi2GetBooleanStatus", vec![StepComplete, Terminated], Box::new(|i| i.get_boolean_status(3, &mut 7))),
         (
             "fmi2GetFMUstate",
             PHASES.to_vec(),
-            Box::new(|i| unsafe {
+            Box::new(|i| {
                 let mut s = std::ptr::null_mut();
-                let r = (i.api.fmi2GetFMUstate)(i.c, &mut s);
-                (i.api.fmi2FreeFMUstate)(i.c, &mut s);
+                let r = i.get_fmu_state(&mut s);
+                i.free_fmu_state(&mut s);
                 r
             }),
         ),
-        ("fmi2SetDebugLogging", PHASES.to_vec(), Box::new(|i| unsafe { (i.api.fmi2SetDebugLogging)(i.c, 1, 0, std::ptr::null()) })),
+        ("fmi2SetDebugLogging", PHASES.to_vec(), Box::new(|i| i.set_debug_logging(true, &[]))),
         ("fmi2Reset", PHASES.to_vec(), Box::new(|i| i.reset())),
     ];
     let mut cells = 0;
@@ -160,6 +144,8 @@ fn unsupported_functions_return_error_and_log() {
     let vr = [fmu.vr("q_1")];
     let mut out = [0.0];
     let order = [1];
+    // SAFETY: `i.c` is live (an `Instance`); every array is a local of the length passed,
+    // writable where the function writes, and outlives the call.
     unsafe {
         assert_eq!((i.api.fmi2GetDirectionalDerivative)(i.c, vr.as_ptr(), 1, vr.as_ptr(), 1, out.as_ptr(), out.as_mut_ptr()), ERROR);
         assert_eq!((i.api.fmi2SetRealInputDerivatives)(i.c, vr.as_ptr(), 1, order.as_ptr(), out.as_ptr()), ERROR);
@@ -206,6 +192,7 @@ fn instantiate_rejects_bad_arguments_with_a_logged_reason() {
     for form in [format!("file:{folder}"), format!("file://localhost{folder}"), format!("FILE://{folder}"), format!("file://{encoded}")] {
         let (c, log, _cb) = fmu.instantiate_with("a", &guid, &form);
         assert!(!c.is_null(), "refused {form}: {}", log.dump());
+        // SAFETY: `c` is a component just instantiated, freed once, used no more.
         unsafe { (fmu.api.fmi2FreeInstance)(c) };
     }
     // A resources folder without a spec file, and one with a corrupt spec.
@@ -221,8 +208,12 @@ fn instantiate_rejects_bad_arguments_with_a_logged_reason() {
     let g = CString::new(guid.clone()).unwrap();
     let u = CString::new(uri.clone()).unwrap();
     let (c, log, cb) = fmu.instantiate_with("probe", &guid, &uri);
+    // SAFETY: `c` is NULL or a component just instantiated, freed once, used no more.
     unsafe { (fmu.api.fmi2FreeInstance)(c) };
     let api = &fmu.api;
+    // SAFETY: every pointer passed is NULL (which the FMU must refuse) or a live local: the
+    // strings are NUL-terminated, `no_logger` and `*cb` valid callbacks, `cb` with the
+    // environment `log`. Each call is refused, so no component is made.
     unsafe {
         assert!((api.fmi2Instantiate)(name.as_ptr(), 1, g.as_ptr(), u.as_ptr(), std::ptr::null(), 0, 0).is_null());
         let no_logger = Callbacks {
@@ -262,6 +253,7 @@ fn resource_locations_in_both_uri_forms_and_percent_encoded() {
     ] {
         let (c, log, _cb) = fmu.instantiate_with("a", &fmu.guid(), &uri);
         assert!(!c.is_null(), "{uri}: {}", log.dump());
+        // SAFETY: `c` is a component just instantiated, freed once, used no more.
         unsafe { (fmu.api.fmi2FreeInstance)(c) };
     }
 }
@@ -278,9 +270,9 @@ fn bad_value_arguments_are_refused_and_change_nothing() {
     assert!(i.log.contains("unknown value reference 99999"));
     let mut v = 0;
     let bogus = fmu.vr("x");
-    assert_eq!(unsafe { (i.api.fmi2GetInteger)(i.c, &bogus, 1, &mut v) }, ERROR);
+    assert_eq!(i.get_integer(&[bogus], std::slice::from_mut(&mut v)), ERROR);
     assert!(i.log.contains("is a Real variable, not Integer"), "{}", i.log.dump());
-    assert_eq!(unsafe { (i.api.fmi2GetInteger)(i.c, &seed, 1, &mut v) }, OK);
+    assert_eq!(i.get_integer(&[seed], std::slice::from_mut(&mut v)), OK);
 
     // Outputs and fixed parameters cannot be set while running.
     assert_eq!(i.set_real(&[q], &[1.0]), ERROR);
@@ -297,7 +289,10 @@ fn bad_value_arguments_are_refused_and_change_nothing() {
     }
 
     // NULL arrays with n > 0.
+    // SAFETY: `i.c` is live; each call passes one NULL array, which the FMU must refuse before
+    // reading, and one temporary array of the 1 element passed, which outlives the call.
     assert_eq!(unsafe { (i.api.fmi2SetReal)(i.c, std::ptr::null(), 1, [1.0].as_ptr()) }, ERROR);
+    // SAFETY: as above.
     assert_eq!(unsafe { (i.api.fmi2GetReal)(i.c, [q].as_ptr(), 1, std::ptr::null_mut()) }, ERROR);
 
     // Step size and communication point.
@@ -309,7 +304,7 @@ fn bad_value_arguments_are_refused_and_change_nothing() {
     assert!(i.log.contains("differs from the FMU's time 0"), "{}", i.log.dump());
     // Still at t = 0, still working.
     still_works(&fmu, &i, Phase::StepComplete);
-    assert_eq!(unsafe { (i.api.fmi2SetDebugLogging)(i.c, 1, 1, [CString::new("nonsense").unwrap().as_ptr()].as_ptr()) }, ERROR);
+    assert_eq!(i.set_debug_logging(true, &[&CString::new("nonsense").unwrap()]), ERROR);
     assert!(i.log.contains("unknown log category 'nonsense'"));
 }
 
@@ -322,11 +317,11 @@ fn debug_logging_categories_switch_call_traces() {
     let quiet = i.log.take();
     assert!(quiet.is_empty(), "quiet by default: {quiet:?}");
     let cat = CString::new("logCalls").unwrap();
-    assert_eq!(unsafe { (i.api.fmi2SetDebugLogging)(i.c, 1, 1, [cat.as_ptr()].as_ptr()) }, OK);
+    assert_eq!(i.set_debug_logging(true, &[&cat]), OK);
     i.step(1e-3, 1e-3);
     let log = i.log.take();
     assert!(log.iter().any(|(_, c, m)| c == "logCalls" && m == "fmi2DoStep"), "{log:?}");
-    assert_eq!(unsafe { (i.api.fmi2SetDebugLogging)(i.c, 0, 0, std::ptr::null()) }, OK);
+    assert_eq!(i.set_debug_logging(false, &[]), OK);
     i.log.take();
     i.step(2e-3, 1e-3);
     assert!(i.log.take().is_empty());
@@ -360,27 +355,27 @@ fn fmu_state_restores_bit_identically_also_through_serialization() {
     let meas = fmu.vr("q_meas_1");
     run(&fmu, &i, 0, 300);
     let mut saved = std::ptr::null_mut();
-    assert_eq!(unsafe { (i.api.fmi2GetFMUstate)(i.c, &mut saved) }, OK);
+    assert_eq!(i.get_fmu_state(&mut saved), OK);
     let mut reference = run(&fmu, &i, 300, 500);
     reference.push(i.get_real(&[meas]).unwrap()[0]);
 
-    assert_eq!(unsafe { (i.api.fmi2SetFMUstate)(i.c, saved) }, OK);
+    assert_eq!(i.set_fmu_state(saved), OK);
     let mut again = run(&fmu, &i, 300, 500);
     again.push(i.get_real(&[meas]).unwrap()[0]);
     assert_eq!(reference.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), again.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
 
     // Serialize, free, deserialize into a fresh instance.
     let mut size = 0;
-    assert_eq!(unsafe { (i.api.fmi2SerializedFMUstateSize)(i.c, saved, &mut size) }, OK);
+    assert_eq!(i.serialized_fmu_state_size(saved, &mut size), OK);
     let mut bytes = vec![0u8; size];
-    assert_eq!(unsafe { (i.api.fmi2SerializeFMUstate)(i.c, saved, bytes.as_mut_ptr(), size) }, OK);
-    assert_eq!(unsafe { (i.api.fmi2SerializeFMUstate)(i.c, saved, bytes.as_mut_ptr(), size - 1) }, ERROR);
-    assert_eq!(unsafe { (i.api.fmi2FreeFMUstate)(i.c, &mut saved) }, OK);
+    assert_eq!(i.serialize_fmu_state(saved, &mut bytes), OK);
+    assert_eq!(i.serialize_fmu_state(saved, &mut bytes[..size - 1]), ERROR);
+    assert_eq!(i.free_fmu_state(&mut saved), OK);
     assert!(saved.is_null());
     let other = fmu.instance();
     let mut restored = std::ptr::null_mut();
-    assert_eq!(unsafe { (other.api.fmi2DeSerializeFMUstate)(other.c, bytes.as_ptr(), size, &mut restored) }, OK);
-    assert_eq!(unsafe { (other.api.fmi2SetFMUstate)(other.c, restored) }, OK);
+    assert_eq!(other.deserialize_fmu_state(&bytes, &mut restored), OK);
+    assert_eq!(other.set_fmu_state(restored), OK);
     let mut third = run(&fmu, &other, 300, 500);
     third.push(other.get_real(&[meas]).unwrap()[0]);
     assert_eq!(reference.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), third.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
@@ -388,7 +383,7 @@ fn fmu_state_restores_bit_identically_also_through_serialization() {
     // Corrupt buffers: truncated, one byte altered anywhere, empty, foreign.
     let reject = |b: &[u8], why: &str| {
         let mut s = std::ptr::null_mut();
-        assert_eq!(unsafe { (other.api.fmi2DeSerializeFMUstate)(other.c, b.as_ptr(), b.len(), &mut s) }, ERROR, "{why}");
+        assert_eq!(other.deserialize_fmu_state(b, &mut s), ERROR, "{why}");
         assert!(s.is_null(), "{why}: a state was allocated");
     };
     for cut in [0, 1, 8, 20, size / 2, size - 1] {
@@ -408,12 +403,12 @@ fn fmu_state_restores_bit_identically_also_through_serialization() {
     }));
     let foreign = three.instance();
     reject_foreign(&foreign, &bytes);
-    unsafe { (other.api.fmi2FreeFMUstate)(other.c, &mut restored) };
+    other.free_fmu_state(&mut restored);
 }
 
 fn reject_foreign(i: &Instance, bytes: &[u8]) {
     let mut s = std::ptr::null_mut();
-    assert_eq!(unsafe { (i.api.fmi2DeSerializeFMUstate)(i.c, bytes.as_ptr(), bytes.len(), &mut s) }, ERROR);
+    assert_eq!(i.deserialize_fmu_state(bytes, &mut s), ERROR);
     assert!(i.log.contains("belongs to another model"), "{}", i.log.dump());
 }
 
@@ -466,11 +461,9 @@ fn get_status_reports_time_and_not_terminated() {
     run(&fmu, &i, 0, 10);
     let mut t = 0.0;
     let mut b = 7;
-    unsafe {
-        assert_eq!((i.api.fmi2GetRealStatus)(i.c, 2, &mut t), OK);
-        assert_eq!((i.api.fmi2GetBooleanStatus)(i.c, 3, &mut b), OK);
-        assert_eq!((i.api.fmi2GetRealStatus)(i.c, 0, &mut t), ERROR);
-    }
+    assert_eq!(i.get_real_status(2, &mut t), OK);
+    assert_eq!(i.get_boolean_status(3, &mut b), OK);
+    assert_eq!(i.get_real_status(0, &mut t), ERROR);
     assert!((t - 0.01).abs() < 1e-15);
     assert_eq!(b, 0);
 }

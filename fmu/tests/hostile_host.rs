@@ -98,6 +98,10 @@ struct Api3 {
 
 impl Api3 {
     fn load() -> Arc<Api3> {
+        // SAFETY: the library is this package's FMU binary, whose initialisers are Rust's own;
+        // each symbol is read as a function type of the ABI the FMI 3.0 header gives it (`c_int`
+        // for `fmi3Status`; the export layer checks its functions against the header), and the
+        // library stays loaded in `_lib` as long as the pointers are kept.
         unsafe {
             let lib = libloading::Library::new(common::binary_path()).expect("dlopen the FMU binary");
             macro_rules! get {
@@ -129,7 +133,11 @@ impl Api3 {
 type Log3 = Mutex<Vec<(c_int, String)>>;
 
 unsafe extern "C" fn capture3(env: *mut c_void, status: c_int, _category: *const c_char, message: *const c_char) {
+    // SAFETY: `env` is the instance environment `Probe::named` gave: its boxed `Log3`, which
+    // the probe keeps until after it frees the instance.
     let log = unsafe { &*(env as *const Log3) };
+    // SAFETY: the FMU logs with `message` a NUL-terminated string that lives until this
+    // callback returns.
     log.lock().unwrap().push((status, unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned()));
 }
 
@@ -139,7 +147,9 @@ enum Version {
     Fmi3,
 }
 
-/// An instance of an FMU in one FMI version, as a host drives it; freed on drop.
+/// An instance of an FMU in one FMI version, as a host drives it; freed on drop. In FMI 3.0,
+/// `c3` is an instance of `api3` (not NULL), its logger's environment `log3`, freed only on
+/// drop; in FMI 2.0, `fmi2` holds the instance and `c3` is NULL.
 struct Probe {
     version: Version,
     fmi2: Option<common::Instance>,
@@ -172,6 +182,9 @@ impl Probe {
                 let (n, token) = (CString::new(name).unwrap(), CString::new(fmu.guid()).unwrap());
                 let path = CString::new(format!("{}/", fmu.resources().display())).unwrap();
                 let env = &*log3 as *const Log3 as *mut c_void;
+                // SAFETY: name, token and path are NUL-terminated strings that outlive the call;
+                // no required variables (NULL, 0); `env` is `log3`, which the probe keeps, and
+                // `capture3` the logger that reads it.
                 c3 = unsafe {
                     (api3.fmi3InstantiateCoSimulation)(
                         n.as_ptr(),
@@ -212,12 +225,13 @@ impl Probe {
     /// Initializes at `start` with an optional stop time.
     fn initialize(&self, start: f64, stop: Option<f64>) {
         let status = match &self.fmi2 {
-            Some(i) => unsafe {
-                let s = (i.api.fmi2SetupExperiment)(i.c, 0, 0.0, start, stop.is_some() as c_int, stop.unwrap_or(0.0));
-                assert_eq!(s, OK, "{}", self.log());
-                assert_eq!((i.api.fmi2EnterInitializationMode)(i.c), OK);
-                (i.api.fmi2ExitInitializationMode)(i.c)
-            },
+            Some(i) => {
+                assert_eq!(i.setup_experiment(None, start, stop), OK, "{}", self.log());
+                assert_eq!(i.enter(), OK);
+                i.exit()
+            }
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); the rest
+            // are values.
             None => unsafe {
                 let s = (self.api3.fmi3EnterInitializationMode)(self.c3, false, 0.0, start, stop.is_some(), stop.unwrap_or(0.0));
                 assert_eq!(s, OK, "{}", self.log());
@@ -230,6 +244,7 @@ impl Probe {
     fn reset(&self) -> c_int {
         match &self.fmi2 {
             Some(i) => i.reset(),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant).
             None => unsafe { (self.api3.fmi3Reset)(self.c3) },
         }
     }
@@ -239,6 +254,8 @@ impl Probe {
             Some(i) => i.step(t, h),
             None => {
                 let (mut event, mut terminate, mut early, mut last) = (false, false, false, f64::NAN);
+                // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); the four
+                // outputs are writable locals that outlive the call.
                 unsafe { (self.api3.fmi3DoStep)(self.c3, t, h, true, &mut event, &mut terminate, &mut early, &mut last) }
             }
         }
@@ -248,7 +265,9 @@ impl Probe {
     fn time(&self) -> f64 {
         let mut t = f64::NAN;
         let status = match &self.fmi2 {
-            Some(i) => unsafe { (i.api.fmi2GetReal)(i.c, &self.time_vr.0, 1, &mut t) },
+            Some(i) => i.get_real_into(&[self.time_vr.0], std::slice::from_mut(&mut t)),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); one value
+            // reference and room for one value, both outliving the call.
             None => unsafe { (self.api3.fmi3GetFloat64)(self.c3, &self.time_vr.1, 1, &mut t, 1) },
         };
         assert_eq!(status, OK, "{}", self.log());
@@ -257,21 +276,29 @@ impl Probe {
 
     fn get_state(&self, state: &mut *mut c_void) -> c_int {
         match &self.fmi2 {
-            Some(i) => unsafe { (i.api.fmi2GetFMUstate)(i.c, state) },
+            Some(i) => i.get_fmu_state(state),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); `state` is a
+            // writable handle that outlives the call.
             None => unsafe { (self.api3.fmi3GetFMUState)(self.c3, state) },
         }
     }
 
     fn set_state(&self, state: *mut c_void) -> c_int {
         match &self.fmi2 {
-            Some(i) => unsafe { (i.api.fmi2SetFMUstate)(i.c, state) },
+            Some(i) => i.set_fmu_state(state),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); `state`, of
+            // whatever origin, is only compared with the instance's handles (which is what the
+            // tests of foreign states check), never read through.
             None => unsafe { (self.api3.fmi3SetFMUState)(self.c3, state) },
         }
     }
 
     fn free_state(&self, state: &mut *mut c_void) -> c_int {
         match &self.fmi2 {
-            Some(i) => unsafe { (i.api.fmi2FreeFMUstate)(i.c, state) },
+            Some(i) => i.free_fmu_state(state),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); `state` is a
+            // writable handle that outlives the call, its value only compared with the
+            // instance's handles.
             None => unsafe { (self.api3.fmi3FreeFMUState)(self.c3, state) },
         }
     }
@@ -279,7 +306,9 @@ impl Probe {
     fn serialize(&self, state: *mut c_void) -> Result<Vec<u8>, c_int> {
         let mut size = 0;
         let status = match &self.fmi2 {
-            Some(i) => unsafe { (i.api.fmi2SerializedFMUstateSize)(i.c, state, &mut size) },
+            Some(i) => i.serialized_fmu_state_size(state, &mut size),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); `state` is
+            // only compared with its handles; `size` is a writable local.
             None => unsafe { (self.api3.fmi3SerializedFMUStateSize)(self.c3, state, &mut size) },
         };
         if status != OK {
@@ -287,7 +316,9 @@ impl Probe {
         }
         let mut bytes = vec![0u8; size];
         let status = match &self.fmi2 {
-            Some(i) => unsafe { (i.api.fmi2SerializeFMUstate)(i.c, state, bytes.as_mut_ptr(), size) },
+            Some(i) => i.serialize_fmu_state(state, &mut bytes),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); `state` is
+            // only compared with its handles; `bytes` holds the `size` writable bytes passed.
             None => unsafe { (self.api3.fmi3SerializeFMUState)(self.c3, state, bytes.as_mut_ptr(), size) },
         };
         if status == OK {
@@ -299,7 +330,10 @@ impl Probe {
 
     fn deserialize(&self, bytes: &[u8], state: &mut *mut c_void) -> c_int {
         match &self.fmi2 {
-            Some(i) => unsafe { (i.api.fmi2DeSerializeFMUstate)(i.c, bytes.as_ptr(), bytes.len(), state) },
+            Some(i) => i.deserialize_fmu_state(bytes, state),
+            // SAFETY: `self.c3` is a live FMI 3.0 instance (the probe's invariant); `bytes` holds
+            // the `bytes.len()` bytes passed and `state` is a writable handle, both outliving
+            // the call.
             None => unsafe { (self.api3.fmi3DeserializeFMUState)(self.c3, bytes.as_ptr(), bytes.len(), state) },
         }
     }
@@ -315,6 +349,8 @@ impl Probe {
 impl Drop for Probe {
     fn drop(&mut self) {
         if self.version == Version::Fmi3 && !self.c3.is_null() {
+            // SAFETY: `self.c3` is a live FMI 3.0 instance, freed here once and used no more;
+            // `log3` is dropped after this.
             unsafe { (self.api3.fmi3FreeInstance)(self.c3) };
         }
     }
@@ -413,7 +449,9 @@ fn a_step_the_time_could_not_go_on_from_is_refused_by_every_model() {
             assert_eq!(p.reset(), OK);
             // A start time at the horizon is refused when it is set, not at the first step.
             let refused = match &p.fmi2 {
-                Some(i) => unsafe { (i.api.fmi2SetupExperiment)(i.c, 0, 0.0, 1e20, 0, 0.0) },
+                Some(i) => i.setup_experiment(None, 1e20, None),
+                // SAFETY: `p.c3` is a live FMI 3.0 instance (the probe's invariant); the rest are
+                // values.
                 None => unsafe { (p.api3.fmi3EnterInitializationMode)(p.c3, false, 0.0, 1e20, false, 0.0) },
             };
             p.refused(refused, "start time 1e20 s is beyond", &format!("{version:?} {name}"));

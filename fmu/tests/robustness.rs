@@ -27,6 +27,7 @@ fn instantiate_spec(spec_text: &str, files: &[(&str, &[u8])]) -> (bool, String) 
     }
     let (c, log, _cb) = fmu.instantiate_with("a", "{none}", &format!("file://{}", dir.path().display()));
     if !c.is_null() {
+        // SAFETY: `c` is a component just instantiated, freed once, used no more.
         unsafe { (fmu.api.fmi2FreeInstance)(c) };
     }
     (!c.is_null(), log.dump())
@@ -100,21 +101,12 @@ fn arm_fmu() -> Fmu {
 }
 
 fn setup(i: &Instance, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> std::ffi::c_int {
-    unsafe {
-        (i.api.fmi2SetupExperiment)(
-            i.c,
-            tolerance.is_some() as _,
-            tolerance.unwrap_or(0.0),
-            start,
-            stop.is_some() as _,
-            stop.unwrap_or(0.0),
-        )
-    }
+    i.setup_experiment(tolerance, start, stop)
 }
 
 fn last_time(i: &Instance) -> f64 {
     let mut t = f64::NAN;
-    assert_eq!(unsafe { (i.api.fmi2GetRealStatus)(i.c, 2, &mut t) }, OK);
+    assert_eq!(i.get_real_status(2, &mut t), OK);
     t
 }
 
@@ -229,16 +221,14 @@ fn a_result_that_is_not_finite_fails_the_call_by_the_variable_name() {
 
 /// Serialized state of `i`.
 fn serialize(i: &Instance) -> Vec<u8> {
-    unsafe {
-        let mut s = std::ptr::null_mut();
-        assert_eq!((i.api.fmi2GetFMUstate)(i.c, &mut s), OK);
-        let mut size = 0;
-        assert_eq!((i.api.fmi2SerializedFMUstateSize)(i.c, s, &mut size), OK);
-        let mut bytes = vec![0; size];
-        assert_eq!((i.api.fmi2SerializeFMUstate)(i.c, s, bytes.as_mut_ptr(), size), OK);
-        assert_eq!((i.api.fmi2FreeFMUstate)(i.c, &mut s), OK);
-        bytes
-    }
+    let mut s = std::ptr::null_mut();
+    assert_eq!(i.get_fmu_state(&mut s), OK);
+    let mut size = 0;
+    assert_eq!(i.serialized_fmu_state_size(s, &mut size), OK);
+    let mut bytes = vec![0; size];
+    assert_eq!(i.serialize_fmu_state(s, &mut bytes), OK);
+    assert_eq!(i.free_fmu_state(&mut s), OK);
+    bytes
 }
 
 /// Offsets of the 8 bytes of `value` in `bytes`.
@@ -261,10 +251,10 @@ fn altered(bytes: &[u8], at: usize, value: f64) -> Vec<u8> {
 /// when reading the bytes, the model its own when it is given the state.
 fn restore(i: &Instance, bytes: &[u8]) -> std::ffi::c_int {
     let mut s = std::ptr::null_mut();
-    let mut status = unsafe { (i.api.fmi2DeSerializeFMUstate)(i.c, bytes.as_ptr(), bytes.len(), &mut s) };
+    let mut status = i.deserialize_fmu_state(bytes, &mut s);
     if status == OK {
-        status = unsafe { (i.api.fmi2SetFMUstate)(i.c, s) };
-        unsafe { (i.api.fmi2FreeFMUstate)(i.c, &mut s) };
+        status = i.set_fmu_state(s);
+        i.free_fmu_state(&mut s);
     }
     status
 }

@@ -154,6 +154,8 @@ fn models() -> Vec<Model> {
 
 /// A state pointer of an instance, sent with it to its worker.
 struct State(*mut c_void);
+// SAFETY: the pointer is a handle of the instance it is sent with, only ever passed back to
+// that instance's functions (which take it as a number), never read through.
 unsafe impl Send for State {}
 
 /// One instance on its run: either soaked (states saved, restored, replayed) or plain.
@@ -195,8 +197,8 @@ impl Run {
         let mut slot = State(std::ptr::null_mut());
         let mut size = 0;
         if soaked {
-            assert_eq!(unsafe { (instance.api.fmi2GetFMUstate)(instance.c, &mut slot.0) }, OK);
-            assert_eq!(unsafe { (instance.api.fmi2SerializedFMUstateSize)(instance.c, slot.0, &mut size) }, OK);
+            assert_eq!(instance.get_fmu_state(&mut slot.0), OK);
+            assert_eq!(instance.serialized_fmu_state_size(slot.0, &mut size), OK);
         }
         let (n_in, n_out) = (model.inputs.len(), model.outputs.len());
         Run {
@@ -235,8 +237,7 @@ impl Run {
         let i = &self.instance;
         assert_eq!(i.set_real(&self.model.inputs, inputs), OK, "{}", i.log.dump());
         assert_eq!(i.step(t, STEP), OK, "{} at step {}: {}", self.model.name, self.k, i.log.dump());
-        let status = unsafe { (i.api.fmi2GetReal)(i.c, self.model.outputs.as_ptr(), outputs.len(), outputs.as_mut_ptr()) };
-        assert_eq!(status, OK);
+        assert_eq!(i.get_real_into(&self.model.outputs, outputs), OK);
         self.k += 1;
         self.do_steps += 1;
         outputs.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, v| (h ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3))
@@ -254,20 +255,18 @@ impl Run {
     /// steps, restores (from the copy or the slot, in turn) and steps them again: the outputs at
     /// the restore and the whole replay must be the same.
     fn checkpoint(&mut self, replay: usize) {
-        let api = self.instance.api.clone();
-        let c = self.instance.c;
-        assert_eq!(unsafe { (api.fmi2GetFMUstate)(c, &mut self.slot.0) }, OK);
+        assert_eq!(self.instance.get_fmu_state(&mut self.slot.0), OK);
         let (saved_at, at_save) = (self.k, self.outputs());
         let mut size = 0;
-        assert_eq!(unsafe { (api.fmi2SerializedFMUstateSize)(c, self.slot.0, &mut size) }, OK);
+        assert_eq!(self.instance.serialized_fmu_state_size(self.slot.0, &mut size), OK);
         self.serialized.resize(size, 0);
-        assert_eq!(unsafe { (api.fmi2SerializeFMUstate)(c, self.slot.0, self.serialized.as_mut_ptr(), size) }, OK);
+        assert_eq!(self.instance.serialize_fmu_state(self.slot.0, &mut self.serialized), OK);
         let mut copy = std::ptr::null_mut();
-        assert_eq!(unsafe { (api.fmi2DeSerializeFMUstate)(c, self.serialized.as_ptr(), size, &mut copy) }, OK);
+        assert_eq!(self.instance.deserialize_fmu_state(&self.serialized, &mut copy), OK);
         let first_pass = self.steps(replay);
         let after = self.outputs();
         let from_copy = self.restores % 2 == 0;
-        assert_eq!(unsafe { (api.fmi2SetFMUstate)(c, if from_copy { copy } else { self.slot.0 }) }, OK);
+        assert_eq!(self.instance.set_fmu_state(if from_copy { copy } else { self.slot.0 }), OK);
         self.restores += 1;
         self.k = saved_at;
         assert_eq!(bits(&self.outputs()), bits(&at_save), "{}: outputs at the restore of step {saved_at}", self.model.name);
@@ -275,7 +274,7 @@ impl Run {
         assert_eq!(second_pass, first_pass, "{}: replay of steps {saved_at}..{}", self.model.name, saved_at + replay);
         assert_eq!(bits(&self.outputs()), bits(&after));
         self.replays += 1;
-        assert_eq!(unsafe { (api.fmi2FreeFMUstate)(c, &mut copy) }, OK);
+        assert_eq!(self.instance.free_fmu_state(&mut copy), OK);
         if self.first.is_none() {
             self.first = Some((saved_at, first_pass));
             self.first_bytes.extend_from_slice(&self.serialized);
@@ -303,15 +302,12 @@ impl Run {
     /// replays the steps after it.
     fn rewind_to_first(&mut self, replay: usize) {
         let Some((saved_at, hash)) = self.first.take() else { return };
-        let api = self.instance.api.clone();
-        let c = self.instance.c;
         let mut state = std::ptr::null_mut();
-        let bytes = &self.first_bytes;
-        assert_eq!(unsafe { (api.fmi2DeSerializeFMUstate)(c, bytes.as_ptr(), bytes.len(), &mut state) }, OK);
-        assert_eq!(unsafe { (api.fmi2SetFMUstate)(c, state) }, OK);
+        assert_eq!(self.instance.deserialize_fmu_state(&self.first_bytes, &mut state), OK);
+        assert_eq!(self.instance.set_fmu_state(state), OK);
         self.k = saved_at;
         assert_eq!(self.steps(replay), hash, "{}: replay after the first state, at the end", self.model.name);
-        assert_eq!(unsafe { (api.fmi2FreeFMUstate)(c, &mut state) }, OK);
+        assert_eq!(self.instance.free_fmu_state(&mut state), OK);
         self.rewinds += 1;
     }
 }
@@ -319,7 +315,7 @@ impl Run {
 impl Drop for Run {
     fn drop(&mut self) {
         if !self.slot.0.is_null() {
-            unsafe { (self.instance.api.fmi2FreeFMUstate)(self.instance.c, &mut self.slot.0) };
+            self.instance.free_fmu_state(&mut self.slot.0);
         }
     }
 }
@@ -343,6 +339,8 @@ extern "C" {
 fn thread_cpu_seconds() -> f64 {
     const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
     let mut t = Timespec { seconds: 0, nanoseconds: 0 };
+    // SAFETY: `clock_gettime` is libc's, declared as POSIX does; `t` is a writable `timespec`
+    // (two 64-bit fields on the 64-bit Linux this test runs on) that outlives the call.
     assert_eq!(unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) }, 0);
     t.seconds as f64 + t.nanoseconds as f64 * 1e-9
 }
@@ -377,6 +375,8 @@ extern "C" {
 
 /// Bytes allocated by malloc and not freed (small blocks and mapped ones).
 fn heap_in_use() -> usize {
+    // SAFETY: `mallinfo2` is glibc's (2.33 and later), declared as glibc does; it takes nothing
+    // and returns its struct by value.
     let m = unsafe { mallinfo2() };
     m.uordblks + m.hblkhd
 }

@@ -202,6 +202,36 @@ pub enum ForeignState {
     OtherVariables,
 }
 
+/// Why an FMU state of this model holds what no instance of this layer saves: numbers that
+/// are not finite, or a time before its start time. The numbers are as messages show them.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum UnfitState {
+    /// Its time or start time is NaN or infinite.
+    #[error("the state's {what} is {value}, not a finite number")]
+    NonFiniteTime {
+        /// `time` or `start time`.
+        what: &'static str,
+        /// The value.
+        value: String,
+    },
+    /// Its time is before its start time [s].
+    #[error("the state's time {time} s is before its start time {start} s")]
+    BeforeStart {
+        /// The time.
+        time: String,
+        /// The start time.
+        start: String,
+    },
+    /// A Real value is NaN or infinite.
+    #[error("the state holds {value} for '{name}', not a finite number")]
+    NonFiniteValue {
+        /// The value.
+        value: String,
+        /// The variable.
+        name: String,
+    },
+}
+
 /// Why an instance could not be made.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum InstantiateError {
@@ -959,19 +989,17 @@ impl Instance {
 
     /// Refuses an FMU state with times or Real values that are not finite numbers, or a time
     /// before the start time: no instance of this layer saves such a state.
-    fn check_snapshot(&self, snapshot: &Snapshot) -> Result<(), String> {
+    fn check_snapshot(&self, snapshot: &Snapshot) -> Result<(), UnfitState> {
         for (what, t) in [("time", snapshot.time), ("start time", snapshot.start_time)] {
             if !t.is_finite() {
-                return Err(format!("the state's {what} is {}, not a finite number", show(t)));
+                return Err(UnfitState::NonFiniteTime { what, value: show(t) });
             }
         }
         if snapshot.time < snapshot.start_time {
-            return Err(format!("the state's time {} s is before its start time {} s", show(snapshot.time), show(snapshot.start_time)));
+            return Err(UnfitState::BeforeStart { time: show(snapshot.time), start: show(snapshot.start_time) });
         }
         match snapshot.values.reals.iter().position(|v| !v.is_finite()) {
-            Some(vr) => {
-                Err(format!("the state holds {} for '{}', not a finite number", show(snapshot.values.reals[vr]), self.real_name(vr as u32)))
-            }
+            Some(vr) => Err(UnfitState::NonFiniteValue { value: show(snapshot.values.reals[vr]), name: self.real_name(vr as u32) }),
             None => Ok(()),
         }
     }
@@ -1035,7 +1063,10 @@ impl Instance {
         if let Err(s) = self.check_phase("fmi2SetFMUstate", Function::FmuState) {
             return s;
         }
-        if let Err(e) = self.check_owner(snapshot).map_err(|e| e.to_string()).and_then(|()| self.check_snapshot(snapshot)) {
+        if let Err(e) = self.check_owner(snapshot) {
+            return self.error(&format!("{}: {e}", self.api.name("fmi2SetFMUstate")));
+        }
+        if let Err(e) = self.check_snapshot(snapshot) {
             return self.error(&format!("{}: {e}", self.api.name("fmi2SetFMUstate")));
         }
         if let Err(e) = self.model.load_state(&snapshot.values, &snapshot.internal) {
@@ -1222,7 +1253,7 @@ impl Instance {
         }
         let values = Values { reals, integers, booleans, strings };
         let snapshot = Snapshot { model: self.guid.clone(), phase, time, start_time, values, internal };
-        self.check_snapshot(&snapshot).map_err(invalid)?;
+        self.check_snapshot(&snapshot).map_err(|e| invalid(e.to_string()))?;
         Ok(snapshot)
     }
 

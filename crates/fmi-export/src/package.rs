@@ -76,6 +76,35 @@ pub enum NotALibrary {
     NotMachO,
 }
 
+/// Why a library does not belong in a platform folder.
+#[derive(Debug, thiserror::Error)]
+pub enum BinaryError {
+    /// The bytes are no shared library.
+    #[error(transparent)]
+    NotALibrary(#[from] NotALibrary),
+    /// A platform folder FMI 2.0 does not name.
+    #[error("unknown platform folder {platform:?} (known: {known})")]
+    UnknownPlatform {
+        /// The folder given.
+        platform: String,
+        /// The folders known, listed.
+        known: String,
+    },
+    /// A library for another platform.
+    #[error("a {is} library, not one for {platform} ({wanted})")]
+    OtherPlatform {
+        /// What the library is: its formats and architectures.
+        is: String,
+        /// The folder given.
+        platform: String,
+        /// What that folder takes.
+        wanted: String,
+    },
+    /// FMI 3.0 has no platform folder for this FMI 2.0 one.
+    #[error("no FMI 3.0 platform folder known for {0:?}")]
+    NoFmi3Folder(String),
+}
+
 /// The architectures of a macOS library, thin or universal: `"x86_64"`, `"arm64"`.
 pub fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, NotALibrary> {
     use object::{Architecture as A, BinaryFormat as F};
@@ -97,9 +126,9 @@ pub fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, NotALibrar
 /// file format (ELF, PE, Mach-O or a universal Mach-O), word size and architecture. The error
 /// says what the file is instead, so a binary in the wrong folder is caught when the FMU is
 /// written, not when a user's tool fails to load it.
-pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), String> {
+pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), BinaryError> {
     use object::{Architecture as A, BinaryFormat as F};
-    let slices = slices(bytes).map_err(|e| e.to_string())?;
+    let slices = slices(bytes)?;
     let accepted: &[(F, A)] = match platform {
         "linux64" => &[(F::Elf, A::X86_64), (F::Elf, A::Aarch64)],
         "linux32" => &[(F::Elf, A::I386), (F::Elf, A::Arm)],
@@ -108,13 +137,13 @@ pub fn check_binary(platform: &str, bytes: &[u8]) -> Result<(), String> {
         "darwin64" => &[(F::MachO, A::X86_64), (F::MachO, A::Aarch64)],
         "darwin32" => &[(F::MachO, A::I386)],
         "aarch64-linux" => &[(F::Elf, A::Aarch64)],
-        _ => return Err(format!("unknown platform folder {platform:?} (known: {})", platform_names())),
+        _ => return Err(BinaryError::UnknownPlatform { platform: platform.to_owned(), known: platform_names() }),
     };
     let wrong: Vec<String> = slices.iter().filter(|s| !accepted.contains(s)).map(|(f, a)| format!("{f:?} {a:?}")).collect();
     if slices.is_empty() || !wrong.is_empty() {
         let is: Vec<String> = slices.iter().map(|(f, a)| format!("{f:?} {a:?}")).collect();
         let want: Vec<String> = accepted.iter().map(|(f, a)| format!("{f:?} {a:?}")).collect();
-        return Err(format!("a {} library, not one for {platform} ({})", is.join(" + "), want.join(" or ")));
+        return Err(BinaryError::OtherPlatform { is: is.join(" + "), platform: platform.to_owned(), wanted: want.join(" or ") });
     }
     Ok(())
 }

@@ -15,11 +15,13 @@ pub type FmuState = *mut c_void;
 /// A string argument, or `None` for NULL or text that is not UTF-8.
 ///
 /// # Safety
-/// `p` is NULL or a valid C string that outlives the returned reference.
+/// `p` is NULL or a NUL-terminated C string, unchanged while the returned reference lives.
 pub unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
     if p.is_null() {
         None
     } else {
+        // SAFETY: `p` is not NULL, so by this function's contract it is a NUL-terminated
+        // string that stays valid and unchanged for 'a.
         unsafe { CStr::from_ptr(p) }.to_str().ok()
     }
 }
@@ -27,13 +29,16 @@ pub unsafe fn str_arg<'a>(p: *const c_char) -> Option<&'a str> {
 /// The array at `p` of `n` elements; empty for `n == 0` whatever `p` is, `None` for NULL.
 ///
 /// # Safety
-/// A non-null `p` points to `n` valid elements that outlive the returned slice.
+/// A non-null `p` points to an array of `n` initialised, aligned elements (a C array the
+/// host owns), not written while the returned slice lives.
 pub unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if n == 0 {
         Some(&[])
     } else if p.is_null() {
         None
     } else {
+        // SAFETY: `p` is not NULL and `n > 0`, so by this function's contract it is the
+        // start of `n` initialised, aligned elements that stay valid and unwritten for 'a.
         Some(unsafe { std::slice::from_raw_parts(p, n) })
     }
 }
@@ -41,15 +46,58 @@ pub unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
 /// As [`slice`], writable.
 ///
 /// # Safety
-/// A non-null `p` points to `n` writable elements, not aliased, that outlive the slice.
+/// A non-null `p` points to an array of `n` initialised, aligned, writable elements (a C
+/// array the host owns), reached through no other pointer while the returned slice lives.
 pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         Some(&mut [])
     } else if p.is_null() {
         None
     } else {
+        // SAFETY: `p` is not NULL and `n > 0`, so by this function's contract it is the
+        // start of `n` initialised, aligned, writable elements, used only through this slice for 'a.
         Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
     }
+}
+
+/// Why an instantiate function of either API returns NULL: the text it logs, after the
+/// function's name.
+#[derive(Debug, thiserror::Error)]
+pub enum Refused {
+    /// No usable instance name; the payload is the version's rule.
+    #[error("the instance name is NULL, empty, white space only or not UTF-8 ({0})")]
+    Name(&'static str),
+    /// FMI 2.0: a model type other than co-simulation.
+    #[error("fmuType {0} requested, this FMU supports only fmi2CoSimulation (1)")]
+    FmuType(c_int),
+    /// FMI 3.0: event mode asked for.
+    #[error("eventModeUsed is true, but this FMU has no event mode (hasEventMode=\"false\")")]
+    EventMode,
+    /// The named string argument (GUID, instantiation token) is NULL or not UTF-8.
+    #[error("the {0} is NULL or not UTF-8")]
+    NullOrNotUtf8(&'static str),
+    /// The named string argument (resource location or path) is not UTF-8.
+    #[error("the {0} is not UTF-8")]
+    NotUtf8(&'static str),
+    /// FMI 2.0: the resource location names no local folder.
+    #[error(transparent)]
+    ResourceUri(#[from] crate::uri::ResourceUriError),
+    /// FMI 3.0: the instantiation token is not the model's.
+    #[error(
+        "instantiation token {given} does not match this FMU's {expected}: the modelDescription.xml and the binary or resources differ"
+    )]
+    WrongToken {
+        /// The token the host passed.
+        given: String,
+        /// The model's.
+        expected: String,
+    },
+    /// The instance refuses its arguments.
+    #[error(transparent)]
+    Instance(#[from] crate::instance::InstantiateError),
+    /// The model factory failed.
+    #[error("{0}")]
+    Model(crate::ModelError),
 }
 
 /// Logs that argument(s) `what` of `function` (an FMI 2.0 name) were NULL; `Error`.
@@ -68,8 +116,9 @@ fn state_word(instance: &Instance) -> &'static str {
 /// The handle `*state` holds on entry: `None` for NULL (a new state is wanted).
 ///
 /// # Safety
-/// `state` points to a readable handle.
+/// `state` points to a readable, aligned handle.
 unsafe fn handle_in(state: *mut FmuState) -> Option<StateHandle> {
+    // SAFETY: `state` points to a readable handle (this function's contract).
     let handle = unsafe { *state } as StateHandle;
     (handle != 0).then_some(handle)
 }
@@ -78,13 +127,17 @@ unsafe fn handle_in(state: *mut FmuState) -> Option<StateHandle> {
 /// overwritten.
 ///
 /// # Safety
-/// `state` is NULL or points to a writable handle.
+/// `state` is NULL or points to a readable and writable handle, for the call.
 pub unsafe fn get_fmu_state(instance: &mut Instance, state: *mut FmuState) -> Status {
     if state.is_null() {
         return null_argument(instance, "fmi2GetFMUstate", state_word(instance));
     }
-    match instance.save_state(unsafe { handle_in(state) }) {
+    // SAFETY: `state` is not NULL, so it points to the host's handle, readable and
+    // writable for this call (this function's contract).
+    let held = unsafe { handle_in(state) };
+    match instance.save_state(held) {
         Ok(handle) => {
+            // SAFETY: as above: `state` is the host's writable handle.
             unsafe { *state = handle as FmuState };
             Status::Ok
         }
@@ -105,7 +158,7 @@ pub fn set_fmu_state(instance: &mut Instance, state: FmuState) -> Status {
 /// pointer to NULL is nothing to free.
 ///
 /// # Safety
-/// `state` is NULL or points to a writable handle.
+/// `state` is NULL or points to a readable and writable handle, for the call.
 pub unsafe fn free_fmu_state(instance: &mut Instance, state: *mut FmuState) -> Status {
     if let Err(s) = instance.check_phase("fmi2FreeFMUstate", Function::FmuState) {
         return s;
@@ -113,9 +166,12 @@ pub unsafe fn free_fmu_state(instance: &mut Instance, state: *mut FmuState) -> S
     if state.is_null() {
         return Status::Ok;
     }
+    // SAFETY: `state` is not NULL, so it points to the host's handle, readable and writable
+    // for this call (this function's contract).
     let Some(handle) = (unsafe { handle_in(state) }) else { return Status::Ok };
     let status = instance.free_state(handle);
     if status == Status::Ok {
+        // SAFETY: as above: `state` is the host's writable handle.
         unsafe { *state = std::ptr::null_mut() };
     }
     status
@@ -131,6 +187,8 @@ pub unsafe fn serialized_fmu_state_size(instance: &mut Instance, state: FmuState
     }
     match instance.serialize_state(state as StateHandle) {
         Ok(bytes) => {
+            // SAFETY: `size` is not NULL, so it is the host's writable `size_t` (this
+            // function's contract).
             unsafe { *size = bytes.len() };
             Status::Ok
         }
@@ -143,6 +201,8 @@ pub unsafe fn serialized_fmu_state_size(instance: &mut Instance, state: FmuState
 /// # Safety
 /// `out` is NULL or `size` writable bytes.
 pub unsafe fn serialize_fmu_state(instance: &mut Instance, state: FmuState, out: *mut u8, size: usize) -> Status {
+    // SAFETY: `out` is NULL (refused by `slice_mut`) or the host's buffer of `size` writable
+    // bytes for this call (this function's contract).
     let out = unsafe { slice_mut(out, size) };
     let (false, Some(out)) = (state.is_null(), out) else {
         return null_argument(instance, "fmi2SerializeFMUstate", &format!("{} or serializedState", state_word(instance)));
@@ -165,17 +225,25 @@ pub unsafe fn serialize_fmu_state(instance: &mut Instance, state: FmuState, out:
 /// a new handle in `*state`, or overwrites the state of this instance it holds.
 ///
 /// # Safety
-/// `bytes` is NULL or `size` readable bytes; `state` is NULL or points to a writable handle.
+/// `bytes` is NULL or `size` readable bytes; `state` is NULL or points to a readable and
+/// writable handle; both for the call.
 pub unsafe fn deserialize_fmu_state(instance: &mut Instance, bytes: *const u8, size: usize, state: *mut FmuState) -> Status {
-    match (unsafe { slice(bytes, size) }, state.is_null()) {
-        (Some(bytes), false) => match instance.deserialize_state(bytes, unsafe { handle_in(state) }) {
-            Ok(handle) => {
-                unsafe { *state = handle as FmuState };
-                Status::Ok
-            }
-            Err(s) => s,
-        },
-        _ => null_argument(instance, "fmi2DeSerializeFMUstate", &format!("serializedState or {}", state_word(instance))),
+    // SAFETY: `bytes` is NULL (refused by `slice`) or the host's `size` readable bytes for
+    // this call (this function's contract).
+    let bytes = unsafe { slice(bytes, size) };
+    let (Some(bytes), false) = (bytes, state.is_null()) else {
+        return null_argument(instance, "fmi2DeSerializeFMUstate", &format!("serializedState or {}", state_word(instance)));
+    };
+    // SAFETY: `state` is not NULL, so it points to the host's handle, readable and writable
+    // for this call (this function's contract).
+    let held = unsafe { handle_in(state) };
+    match instance.deserialize_state(bytes, held) {
+        Ok(handle) => {
+            // SAFETY: as above: `state` is the host's writable handle.
+            unsafe { *state = handle as FmuState };
+            Status::Ok
+        }
+        Err(s) => s,
     }
 }
 
@@ -276,12 +344,15 @@ pub trait HoldsInstance {
 /// becomes `Fatal` (logged, the instance then only freed) instead of unwinding into the host.
 ///
 /// # Safety
-/// `c` is NULL or a handle the API's instantiate function returned for a `W`, not freed.
+/// `c` is NULL or a handle the API's instantiate function returned for a `W`, not freed, on
+/// which no other call runs meanwhile (FMI allows one call at a time per instance).
 pub unsafe fn guarded<W: HoldsInstance>(c: *mut c_void, name: &str, body: impl FnOnce(&mut W) -> Status) -> c_int {
     if c.is_null() {
         return Status::Error as c_int;
     }
-    // SAFETY: a non-null handle is one the instantiate function returned (the caller's promise).
+    // SAFETY: `c` is not NULL, so it is the `Box<W>` the instantiate function leaked and no
+    // free has reclaimed (this function's contract); the host makes one call at a time on
+    // an instance, so this is the only reference to it until the call returns.
     let wrapper = unsafe { &mut *(c as *mut W) };
     if wrapper.instance().phase() == Phase::Fatal {
         return Status::Fatal as c_int;

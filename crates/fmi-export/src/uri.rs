@@ -35,12 +35,40 @@ impl PathStyle {
     }
 }
 
+/// Why a resource location URI names no folder in a [`PathStyle`]; each error holds the URI.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ResourceUriError {
+    /// Another scheme than `file:`, or none.
+    #[error("resource location '{0}' is not a file URI (file:///…)")]
+    NotFileUri(String),
+    /// Percent-decoding gives bytes that are not UTF-8.
+    #[error("resource location '{0}' is not valid UTF-8 after percent-decoding")]
+    NotUtf8(String),
+    /// Percent-decoding gives a NUL, which no path holds.
+    #[error("resource location '{0}' holds a NUL character")]
+    Nul(String),
+    /// A host other than `localhost`, on Unix (no UNC path to map it to).
+    #[error("resource location '{uri}' names the remote host '{host}'")]
+    RemoteHost {
+        /// The URI.
+        uri: String,
+        /// The host it names.
+        host: String,
+    },
+    /// `file:////` with no server name before the share.
+    #[error("resource location '{0}' names a share without a server")]
+    ShareWithoutServer(String),
+    /// A relative path.
+    #[error("resource location '{0}' is not an absolute path")]
+    NotAbsolute(String),
+}
+
 /// The folder a resource location URI names, as a path in `style` (the folder may not exist).
 /// Errors say what is wrong with the URI.
-pub fn resource_path(uri: &str, style: PathStyle) -> Result<String, String> {
+pub fn resource_path(uri: &str, style: PathStyle) -> Result<String, ResourceUriError> {
     let rest = match uri.get(..5) {
         Some(scheme) if scheme.eq_ignore_ascii_case("file:") => &uri[5..],
-        _ => return Err(format!("resource location '{uri}' is not a file URI (file:///…)")),
+        _ => return Err(ResourceUriError::NotFileUri(uri.to_owned())),
     };
     // Windows tools may write the URI with backslashes; a backslash is never part of a
     // Windows file name, so it can only be a separator there.
@@ -55,20 +83,18 @@ pub fn resource_path(uri: &str, style: PathStyle) -> Result<String, String> {
         },
         None => ("", rest.as_str()),
     };
-    let decoded = percent_decode_str(path)
-        .decode_utf8()
-        .map_err(|_| format!("resource location '{uri}' is not valid UTF-8 after percent-decoding"))?;
+    let decoded = percent_decode_str(path).decode_utf8().map_err(|_| ResourceUriError::NotUtf8(uri.to_owned()))?;
     if decoded.contains('\0') {
-        return Err(format!("resource location '{uri}' holds a NUL character"));
+        return Err(ResourceUriError::Nul(uri.to_owned()));
     }
     let host = if host.eq_ignore_ascii_case("localhost") { "" } else { host };
     match style {
         PathStyle::Unix => {
             if !host.is_empty() {
-                return Err(format!("resource location '{uri}' names the remote host '{host}'"));
+                return Err(ResourceUriError::RemoteHost { uri: uri.to_owned(), host: host.to_owned() });
             }
             if !decoded.starts_with('/') {
-                return Err(format!("resource location '{uri}' is not an absolute path"));
+                return Err(ResourceUriError::NotAbsolute(uri.to_owned()));
             }
             Ok(decoded.into_owned())
         }
@@ -81,7 +107,7 @@ pub fn resource_path(uri: &str, style: PathStyle) -> Result<String, String> {
             if let Some(share) = decoded.strip_prefix("//") {
                 let (server, tail) = share.split_at(share.find('/').unwrap_or(share.len()));
                 if server.is_empty() {
-                    return Err(format!("resource location '{uri}' names a share without a server"));
+                    return Err(ResourceUriError::ShareWithoutServer(uri.to_owned()));
                 }
                 return Ok(unc_path(server, tail));
             }
@@ -89,7 +115,7 @@ pub fn resource_path(uri: &str, style: PathStyle) -> Result<String, String> {
             match drive_letter(local) {
                 Some((drive, tail)) => Ok(format!("{drive}:{}", backslashes(if tail.is_empty() { "/" } else { tail }))),
                 None if decoded.starts_with('/') => Ok(backslashes(&decoded)),
-                None => Err(format!("resource location '{uri}' is not an absolute path")),
+                None => Err(ResourceUriError::NotAbsolute(uri.to_owned())),
             }
         }
     }

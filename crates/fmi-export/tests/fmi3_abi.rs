@@ -52,6 +52,8 @@ fn factory(_resources: Option<&std::path::Path>) -> Result<Box<dyn Model>, Model
 static LOG: Mutex<Vec<(c_int, String)>> = Mutex::new(Vec::new());
 
 unsafe extern "C" fn logger(_env: *mut c_void, status: c_int, _category: *const c_char, message: *const c_char) {
+    // SAFETY: the layer calls its logger with `message` a NUL-terminated string that lives until
+    // the callback returns (`HostLogger::log`).
     let text = unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned();
     LOG.lock().unwrap().push((status, text));
 }
@@ -63,6 +65,9 @@ fn last_error() -> String {
 fn instantiate(token: &str) -> Fmi3Instance {
     let name = CString::new("g").unwrap();
     let token = CString::new(token).unwrap();
+    // SAFETY: the name and token are NUL-terminated strings that outlive the call; the resource
+    // path, the required variables (0 of them) and the environment are NULL, which the standard
+    // allows; the logger is a function of the logger's signature that lives for the program.
     unsafe {
         abi::instantiate_co_simulation(
             factory,
@@ -85,6 +90,8 @@ fn instantiate(token: &str) -> Fmi3Instance {
 fn step(c: Fmi3Instance, t: f64, h: f64) -> (c_int, [bool; 3], f64) {
     let (mut flags, mut last) = ([true; 3], f64::NAN);
     let [a, b, e] = &mut flags;
+    // SAFETY: `c` is the live instance of `instantiate` each caller passes, and the four output
+    // pointers are locals that outlive the call.
     let status = unsafe { abi::do_step(c, t, h, true, a, b, e, &mut last) };
     (status, flags, last)
 }
@@ -99,6 +106,10 @@ fn every_type_through_its_own_functions() {
     assert!(last_error().contains("instantiation token"), "{}", last_error());
     let c = instantiate(&token);
     assert!(!c.is_null());
+    // SAFETY: `c` is live from `instantiate` until `free_instance`, the last call; every array
+    // passed is a local or a temporary of the statement, of the length given with it (the values
+    // count matches except where a mismatch is the point), so all outlive their call; `s[0]` is
+    // read before the next call on `c`, while the string it points into is still kept.
     unsafe {
         let mut y = [0.0];
         assert_eq!(step(c, 0.0, 0.1).0, ERROR);

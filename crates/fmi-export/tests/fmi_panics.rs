@@ -50,6 +50,8 @@ fn exploding_factory(_: Option<&Path>) -> Result<Box<dyn Model>, ModelError> {
 static LOG: Mutex<Vec<String>> = Mutex::new(Vec::new());
 
 unsafe extern "C" fn capture(_: *mut c_void, _: *const c_char, _: c_int, _: *const c_char, message: *const c_char) {
+    // SAFETY: the layer logs with `message` a NUL-terminated string that lives until the
+    // callback returns (`HostLogger::log`), the format of a call without variadic arguments.
     LOG.lock().unwrap().push(unsafe { CStr::from_ptr(message) }.to_string_lossy().into_owned());
 }
 
@@ -69,6 +71,9 @@ fn panics_become_fatal_and_never_unwind_into_the_host() {
     let uri = CString::new(format!("file://{}", dir.path().display())).unwrap();
     let guid = CString::new(description().guid()).unwrap();
     let name = CString::new("bomb").unwrap();
+    // SAFETY: name, GUID and URI are NUL-terminated strings and `callbacks` a valid
+    // `fmi2CallbackFunctions`, all outliving the calls; each `c` is used from `instantiate`
+    // until `free_instance` only, the value arrays are temporaries or locals of the length given.
     unsafe {
         let c = abi::instantiate(bomb, name.as_ptr(), 1, guid.as_ptr(), uri.as_ptr(), &callbacks, 0, 0);
         assert!(!c.is_null());

@@ -57,7 +57,7 @@ fn every_uri_of_the_table_names_its_folder_on_unix_and_on_windows() {
             let got = resource_path(uri, style);
             let ok = match (&got, want) {
                 (Ok(path), Ok(want)) => path == want,
-                (Err(message), Err(())) => message.contains(uri),
+                (Err(error), Err(())) => error.to_string().contains(uri),
                 _ => false,
             };
             if !ok {

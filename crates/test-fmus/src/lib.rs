@@ -25,7 +25,7 @@ use neurarm_fmi_export::{
     Unit, Values, Variability,
 };
 
-pub use package::{built_library, fmu3_in, fmu_in};
+pub use package::{built_library, fmu3_in, fmu_in, PackageError};
 
 /// The models of this crate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

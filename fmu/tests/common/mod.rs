@@ -59,7 +59,11 @@ impl Log {
 /// A non-variadic logger: the host receives the message as the format string (the FMU
 /// escapes '%'), as fmpy's ctypes logger does.
 unsafe extern "C" fn capture(env: *mut c_void, _name: *const c_char, status: c_int, category: *const c_char, message: *const c_char) {
+    // SAFETY: `env` is the component environment `instantiate_with` gave: a `Log` in a box
+    // kept beside the instance, which outlives every call on it that can log.
     let log = unsafe { &*(env as *const Log) };
+    // SAFETY: the FMU logs with category and message NULL or NUL-terminated strings that live
+    // until this callback returns.
     let s = |p: *const c_char| if p.is_null() { String::new() } else { unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned() };
     log.0.lock().unwrap().push((status, s(category), s(message).replace("%%", "%")));
 }
@@ -70,6 +74,11 @@ macro_rules! api {
         pub struct Api { $(pub $name: $ty,)* _lib: libloading::Library }
         impl Api {
             pub fn load(path: &Path) -> Api {
+                // SAFETY: the library is this package's FMU binary, whose initialisers are Rust's
+                // own; each symbol is read as a function type of the ABI the FMI 2.0 header gives
+                // it (`c_int` for its enums, `u8` for `fmi2Byte`; the export layer checks its
+                // functions against the header), and the library stays loaded in `_lib` as long
+                // as the pointers are kept.
                 unsafe {
                     let lib = libloading::Library::new(path).expect("dlopen the FMU binary");
                     $(let $name: $ty = *lib.get::<$ty>(concat!(stringify!($name), "\0").as_bytes()).expect(stringify!($name));)*
@@ -165,6 +174,9 @@ impl Fmu {
             environment: &*log as *const Log as *mut c_void,
         });
         let (name, guid, uri) = (CString::new(name).unwrap(), CString::new(guid).unwrap(), CString::new(uri).unwrap());
+        // SAFETY: name, GUID and URI are NUL-terminated strings and `callbacks` a valid
+        // `fmi2CallbackFunctions` whose environment is `log`; the strings outlive the call, the
+        // callbacks and the log are returned with the component, whose holder keeps them.
         let c = unsafe { (self.api.fmi2Instantiate)(name.as_ptr(), 1, guid.as_ptr(), uri.as_ptr(), &*callbacks, 0, 0) };
         (c, log, callbacks)
     }
@@ -176,7 +188,10 @@ impl Fmu {
     }
 }
 
-/// A live instance; freed on drop.
+/// A live instance; freed on drop. Its methods call the FMU's functions with well-formed
+/// arguments and are safe: `c` is a component `api` instantiated, freed only on drop; `api`
+/// keeps the library loaded; `log` and `_callbacks`, which the component's logger uses, live
+/// as long as it. (Calls with hostile arguments are written out in the tests.)
 pub struct Instance {
     pub api: Arc<Api>,
     pub c: C,
@@ -184,16 +199,29 @@ pub struct Instance {
     pub _callbacks: Box<Callbacks>,
 }
 
+// SAFETY: an FMI 2.0 component may be used from any thread, one call at a time; `Instance`
+// is not `Sync`, so calls on one never overlap; the log the FMU writes to from the calling
+// thread is a `Mutex`, and the library (`Arc<Api>`) is shared read-only.
 unsafe impl Send for Instance {}
 
+// In the methods below, "`self.c` is live" stands for `Instance`'s invariant: a component of
+// `self.api`, not freed, with its logger's log and callbacks alive.
 impl Instance {
     pub fn setup(&self) -> c_int {
-        unsafe { (self.api.fmi2SetupExperiment)(self.c, 0, 0.0, 0.0, 0, 0.0) }
+        self.setup_experiment(None, 0.0, None)
+    }
+    /// `fmi2SetupExperiment` with the tolerance and stop time given or not.
+    pub fn setup_experiment(&self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> c_int {
+        let (tol, stop_time) = (tolerance.unwrap_or(0.0), stop.unwrap_or(0.0));
+        // SAFETY: `self.c` is live; the rest are values.
+        unsafe { (self.api.fmi2SetupExperiment)(self.c, tolerance.is_some() as _, tol, start, stop.is_some() as _, stop_time) }
     }
     pub fn enter(&self) -> c_int {
+        // SAFETY: `self.c` is live.
         unsafe { (self.api.fmi2EnterInitializationMode)(self.c) }
     }
     pub fn exit(&self) -> c_int {
+        // SAFETY: `self.c` is live.
         unsafe { (self.api.fmi2ExitInitializationMode)(self.c) }
     }
     /// Setup, enter and exit initialization.
@@ -203,28 +231,102 @@ impl Instance {
         assert_eq!(self.exit(), OK, "{}", self.log.dump());
     }
     pub fn set_real(&self, vrs: &[u32], values: &[f64]) -> c_int {
+        assert_eq!(vrs.len(), values.len(), "one value per reference");
+        // SAFETY: `self.c` is live; `vrs` and `values` hold `vrs.len()` elements each and
+        // outlive the call.
         unsafe { (self.api.fmi2SetReal)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) }
     }
     pub fn get_real(&self, vrs: &[u32]) -> Result<Vec<f64>, c_int> {
         let mut out = vec![f64::NAN; vrs.len()];
-        match unsafe { (self.api.fmi2GetReal)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) } {
+        match self.get_real_into(vrs, &mut out) {
             OK => Ok(out),
             s => Err(s),
         }
     }
+    /// `fmi2GetReal` of `vrs` into `out` (no allocation).
+    pub fn get_real_into(&self, vrs: &[u32], out: &mut [f64]) -> c_int {
+        assert_eq!(vrs.len(), out.len(), "one value per reference");
+        // SAFETY: `self.c` is live; `vrs` and `out` hold `out.len()` elements each and outlive
+        // the call; `out` is borrowed mutably, so the FMU's writes alias nothing.
+        unsafe { (self.api.fmi2GetReal)(self.c, vrs.as_ptr(), out.len(), out.as_mut_ptr()) }
+    }
+    /// `fmi2GetInteger` of `vrs` into `out`.
+    pub fn get_integer(&self, vrs: &[u32], out: &mut [c_int]) -> c_int {
+        assert_eq!(vrs.len(), out.len(), "one value per reference");
+        // SAFETY: as in `get_real_into`.
+        unsafe { (self.api.fmi2GetInteger)(self.c, vrs.as_ptr(), out.len(), out.as_mut_ptr()) }
+    }
     pub fn step(&self, t: f64, h: f64) -> c_int {
+        // SAFETY: `self.c` is live; the rest are values.
         unsafe { (self.api.fmi2DoStep)(self.c, t, h, 1) }
     }
     pub fn terminate(&self) -> c_int {
+        // SAFETY: `self.c` is live.
         unsafe { (self.api.fmi2Terminate)(self.c) }
     }
     pub fn reset(&self) -> c_int {
+        // SAFETY: `self.c` is live.
         unsafe { (self.api.fmi2Reset)(self.c) }
+    }
+    /// `fmi2SetDebugLogging`; no categories are passed as NULL with n = 0.
+    pub fn set_debug_logging(&self, on: bool, categories: &[&CStr]) -> c_int {
+        let pointers: Vec<*const c_char> = categories.iter().map(|c| c.as_ptr()).collect();
+        let array = if pointers.is_empty() { std::ptr::null() } else { pointers.as_ptr() };
+        // SAFETY: `self.c` is live; `array` is NULL with n = 0 or `pointers`, n NUL-terminated
+        // strings borrowed from `categories`, all outliving the call.
+        unsafe { (self.api.fmi2SetDebugLogging)(self.c, on as c_int, pointers.len(), array) }
+    }
+    /// `fmi2GetRealStatus` of `kind` into `value`.
+    pub fn get_real_status(&self, kind: c_int, value: &mut f64) -> c_int {
+        // SAFETY: `self.c` is live; `value` is a writable real that outlives the call.
+        unsafe { (self.api.fmi2GetRealStatus)(self.c, kind, value) }
+    }
+    /// `fmi2GetBooleanStatus` of `kind` into `value`.
+    pub fn get_boolean_status(&self, kind: c_int, value: &mut c_int) -> c_int {
+        // SAFETY: `self.c` is live; `value` is a writable `fmi2Boolean` that outlives the call.
+        unsafe { (self.api.fmi2GetBooleanStatus)(self.c, kind, value) }
+    }
+    /// `fmi2GetFMUstate`: a new state into `state` if it is NULL, else the state it holds
+    /// overwritten.
+    pub fn get_fmu_state(&self, state: &mut C) -> c_int {
+        // SAFETY: `self.c` is live; `state` is a writable handle that outlives the call.
+        unsafe { (self.api.fmi2GetFMUstate)(self.c, state) }
+    }
+    /// `fmi2SetFMUstate`. Any handle is sound to pass: the layer looks its handles up as
+    /// numbers and never reads through one (a foreign one is refused).
+    pub fn set_fmu_state(&self, state: C) -> c_int {
+        // SAFETY: `self.c` is live; `state` is only compared with the instance's handles.
+        unsafe { (self.api.fmi2SetFMUstate)(self.c, state) }
+    }
+    /// `fmi2FreeFMUstate`: frees `*state` and sets it to NULL.
+    pub fn free_fmu_state(&self, state: &mut C) -> c_int {
+        // SAFETY: `self.c` is live; `state` is a writable handle that outlives the call, its
+        // value only compared with the instance's handles.
+        unsafe { (self.api.fmi2FreeFMUstate)(self.c, state) }
+    }
+    /// `fmi2SerializedFMUstateSize` of `state` into `size`.
+    pub fn serialized_fmu_state_size(&self, state: C, size: &mut usize) -> c_int {
+        // SAFETY: `self.c` is live; `state` is only compared with the instance's handles;
+        // `size` is writable and outlives the call.
+        unsafe { (self.api.fmi2SerializedFMUstateSize)(self.c, state, size) }
+    }
+    /// `fmi2SerializeFMUstate` of `state` into `bytes` (its length is the size passed).
+    pub fn serialize_fmu_state(&self, state: C, bytes: &mut [u8]) -> c_int {
+        // SAFETY: `self.c` is live; `state` is only compared with the instance's handles;
+        // `bytes` holds the `bytes.len()` writable bytes passed and outlives the call.
+        unsafe { (self.api.fmi2SerializeFMUstate)(self.c, state, bytes.as_mut_ptr(), bytes.len()) }
+    }
+    /// `fmi2DeSerializeFMUstate` of `bytes` into `state` (a new state if it is NULL).
+    pub fn deserialize_fmu_state(&self, bytes: &[u8], state: &mut C) -> c_int {
+        // SAFETY: `self.c` is live; `bytes` holds the `bytes.len()` bytes passed and `state`
+        // is a writable handle, both outliving the call.
+        unsafe { (self.api.fmi2DeSerializeFMUstate)(self.c, bytes.as_ptr(), bytes.len(), state) }
     }
 }
 
 impl Drop for Instance {
     fn drop(&mut self) {
+        // SAFETY: `self.c` is live, and no call is made on it after this one.
         unsafe { (self.api.fmi2FreeInstance)(self.c) }
     }
 }

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 
 use crate::instance::{Function, Instance, LogSink, Status};
 use crate::model::ModelFactory;
-use crate::raw::{self, catch_panic, slice, slice_mut, str_arg};
+use crate::raw::{self, catch_panic, slice, slice_mut, str_arg, Refused};
+use crate::uri::ResourceUriError;
 
 /// `fmi2Component`.
 pub type Component = *mut c_void;
@@ -70,12 +71,19 @@ pub struct Wrapper {
     strings: Vec<CString>,
 }
 
-// SAFETY (for all functions below): the host passes pointers as the FMI 2.0 standard
-// describes them; arrays have the lengths given with them.
+// The contract of the `unsafe fn`s below, which the FMI 2.0 standard sets for the host: `c`
+// is NULL or a component that `instantiate` returned and `free_instance` has not freed, with
+// no other call on it running ("`c` as in the FMI 2.0 standard"); an array is NULL or points
+// to as many elements as the length passed with it; a string is NULL or NUL-terminated; all
+// are the host's, valid until the call returns ("arguments as in the FMI 2.0 standard").
 
 /// Runs `body` on the instance behind `c`, turning a panic into `fmi2Fatal`.
+///
+/// # Safety
+/// `c` as in the FMI 2.0 standard.
 unsafe fn with(c: Component, name: &str, body: impl FnOnce(&mut Wrapper) -> Status) -> RawStatus {
-    // SAFETY: a non-null `c` is a Wrapper this API's fmi2Instantiate returned (standard).
+    // SAFETY: `c` is NULL or a live `Wrapper` of `instantiate`, used by this call alone (this
+    // function's contract), which is what `guarded::<Wrapper>` asks.
     unsafe { raw::guarded(c, name, body) }
 }
 
@@ -87,7 +95,7 @@ impl raw::HoldsInstance for Wrapper {
 
 /// Turns a resource location URI into a folder path of this platform (which may not exist):
 /// the forms hosts pass on Unix and Windows, see [`crate::uri`].
-pub fn resource_folder(uri: &str) -> Result<PathBuf, String> {
+pub fn resource_folder(uri: &str) -> Result<PathBuf, ResourceUriError> {
     crate::uri::resource_path(uri, crate::uri::PathStyle::native()).map(PathBuf::from)
 }
 
@@ -112,36 +120,41 @@ pub unsafe fn instantiate(
     // SAFETY: per the standard, `functions` points to the host's callbacks if non-null.
     let Some(functions) = (unsafe { functions.as_ref() }) else { return std::ptr::null_mut() };
     let Some(logger) = functions.logger else { return std::ptr::null_mut() };
+    // SAFETY: `instance_name` is NULL or a NUL-terminated string of the host's, valid for the
+    // call (this function's contract); the name is copied before the call returns.
     let name = unsafe { str_arg(instance_name) }.unwrap_or("");
     let host =
         |name: &str| HostLogger { logger, environment: functions.component_environment, name: CString::new(name).unwrap_or_default() };
-    let fail = |message: String| {
-        host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {message}"));
+    let fail = |why: &dyn std::fmt::Display| {
+        host(name).log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {why}"));
         std::ptr::null_mut()
     };
-    let result = catch_panic(|| -> Result<Component, String> {
+    let result = catch_panic(|| -> Result<Component, Refused> {
         if instance_name.is_null() || name.trim().is_empty() {
-            return Err("the instance name is NULL, empty, white space only or not UTF-8 (FMI 2.0 asks for a non-empty name)".into());
+            return Err(Refused::Name("FMI 2.0 asks for a non-empty name"));
         }
         if fmu_type != FMI2_COSIMULATION {
-            return Err(format!("fmuType {fmu_type} requested, this FMU supports only fmi2CoSimulation (1)"));
+            return Err(Refused::FmuType(fmu_type));
         }
-        let guid = unsafe { str_arg(guid) }.ok_or("the GUID is NULL or not UTF-8")?;
+        // SAFETY: `guid` and `resource_location` are NULL or NUL-terminated strings of the host's,
+        // valid for the call (this function's contract); both are read before it returns.
+        let guid = unsafe { str_arg(guid) }.ok_or(Refused::NullOrNotUtf8("GUID"))?;
+        // SAFETY: as for `guid`.
         let resources = match unsafe { str_arg(resource_location) } {
             Some(location) => Some(resource_folder(location)?),
             None if resource_location.is_null() => None,
-            None => return Err("the resource location is not UTF-8".into()),
+            None => return Err(Refused::NotUtf8("resource location")),
         };
-        let model = factory(resources.as_deref()).map_err(|e| e.to_string())?;
+        let model = factory(resources.as_deref()).map_err(Refused::Model)?;
         let sink_host = host(name);
         let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
-        let instance = Instance::new(name, guid, model, sink, logging_on != 0).map_err(|e| e.to_string())?;
+        let instance = Instance::new(name, guid, model, sink, logging_on != 0)?;
         Ok(Box::into_raw(Box::new(Wrapper { instance, strings: Vec::new() })) as Component)
     });
     match result {
         Ok(Ok(c)) => c,
-        Ok(Err(message)) => fail(message),
-        Err(why) => fail(format!("internal error ({why})")),
+        Ok(Err(refused)) => fail(&refused),
+        Err(why) => fail(&format_args!("internal error ({why})")),
     }
 }
 
@@ -151,6 +164,8 @@ pub unsafe fn instantiate(
 /// `c` is NULL or a component from [`instantiate`] not freed before.
 pub unsafe fn free_instance(c: Component) {
     if !c.is_null() {
+        // SAFETY: a non-null `c` is the `Box<Wrapper>` that `instantiate` leaked and nothing has
+        // freed (this function's contract); the host makes no call on it after this one.
         let _ = catch_panic(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) }));
     }
 }
@@ -160,6 +175,8 @@ pub unsafe fn free_instance(c: Component) {
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn set_debug_logging(c: Component, on: c_int, n: usize, categories: *const *const c_char) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `categories` is NULL or `n` pointers, each NULL
+    // or a NUL-terminated string, all the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi2SetDebugLogging", |w| {
             let Some(ptrs) = slice(categories, n) else {
@@ -182,6 +199,7 @@ pub unsafe fn set_debug_logging(c: Component, on: c_int, n: usize, categories: *
 /// # Safety
 /// `c` as in the FMI 2.0 standard.
 pub unsafe fn setup_experiment(c: Component, tol_defined: c_int, tol: f64, start: f64, stop_defined: c_int, stop: f64) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component (this function's contract); the rest are values.
     unsafe {
         with(c, "fmi2SetupExperiment", |w| {
             w.instance.setup_experiment((tol_defined != 0).then_some(tol), start, (stop_defined != 0).then_some(stop))
@@ -196,6 +214,7 @@ macro_rules! simple {
         /// # Safety
         /// `c` as in the FMI 2.0 standard.
         pub unsafe fn $fn_name(c: Component) -> RawStatus {
+            // SAFETY: `c` is NULL or a live component (this function's contract).
             unsafe { with(c, $c_name, |w| w.instance.$method()) }
         }
     )*};
@@ -221,6 +240,8 @@ fn null_argument(w: &Wrapper, function: &str, what: &str) -> Status {
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_real(c: Component, vr: *const u32, n: usize, value: *mut f64) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` is NULL or `n` value references and
+    // `value` NULL or room for `n` values, the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi2GetReal", |w| match (slice(vr, n), slice_mut(value, n)) {
             (Some(vr), Some(out)) => w.instance.get_real(vr, out),
@@ -234,6 +255,8 @@ pub unsafe fn get_real(c: Component, vr: *const u32, n: usize, value: *mut f64) 
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_integer(c: Component, vr: *const u32, n: usize, value: *mut c_int) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` is NULL or `n` value references and
+    // `value` NULL or room for `n` values, the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi2GetInteger", |w| match (slice(vr, n), slice_mut(value, n)) {
             (Some(vr), Some(out)) => w.instance.get_integer(vr, out),
@@ -247,6 +270,8 @@ pub unsafe fn get_integer(c: Component, vr: *const u32, n: usize, value: *mut c_
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_boolean(c: Component, vr: *const u32, n: usize, value: *mut c_int) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` is NULL or `n` value references and
+    // `value` NULL or room for `n` values, the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi2GetBoolean", |w| match (slice(vr, n), slice_mut(value, n)) {
             (Some(vr), Some(out)) => {
@@ -269,6 +294,9 @@ pub unsafe fn get_boolean(c: Component, vr: *const u32, n: usize, value: *mut c_
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_string(c: Component, vr: *const u32, n: usize, value: *mut *const c_char) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` is NULL or `n` value references and
+    // `value` NULL or room for `n` pointers, the host's for the call (this function's contract).
+    // The pointers written point into `w.strings`, which outlives the call as the standard asks.
     unsafe {
         with(c, "fmi2GetString", |w| match (slice(vr, n), slice_mut(value, n)) {
             (Some(vr), Some(out)) => {
@@ -292,6 +320,8 @@ pub unsafe fn get_string(c: Component, vr: *const u32, n: usize, value: *mut *co
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn set_real(c: Component, vr: *const u32, n: usize, value: *const f64) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` and `value` are NULL or `n` elements each,
+    // the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi2SetReal", |w| match (slice(vr, n), slice(value, n)) {
             (Some(vr), Some(v)) => w.instance.set_real(vr, v),
@@ -305,6 +335,8 @@ pub unsafe fn set_real(c: Component, vr: *const u32, n: usize, value: *const f64
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn set_integer(c: Component, vr: *const u32, n: usize, value: *const c_int) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` and `value` are NULL or `n` elements each,
+    // the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi2SetInteger", |w| match (slice(vr, n), slice(value, n)) {
             (Some(vr), Some(v)) => w.instance.set_integer(vr, v),
@@ -318,6 +350,8 @@ pub unsafe fn set_integer(c: Component, vr: *const u32, n: usize, value: *const 
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn set_boolean(c: Component, vr: *const u32, n: usize, value: *const c_int) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` and `value` are NULL or `n` elements each,
+    // the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi2SetBoolean", |w| match (slice(vr, n), slice(value, n)) {
             (Some(vr), Some(v)) => {
@@ -334,6 +368,9 @@ pub unsafe fn set_boolean(c: Component, vr: *const u32, n: usize, value: *const 
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn set_string(c: Component, vr: *const u32, n: usize, value: *const *const c_char) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `vr` and `value` are NULL or `n` elements each,
+    // every value NULL or a NUL-terminated string, the host's for the call (this function's
+    // contract); the strings are copied before it returns.
     unsafe {
         with(c, "fmi2SetString", |w| match (slice(vr, n), slice(value, n)) {
             (Some(vr), Some(v)) => {
@@ -356,6 +393,8 @@ pub unsafe fn set_string(c: Component, vr: *const u32, n: usize, value: *const *
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `state` is NULL or the host's handle, readable
+    // and writable for the call (this function's contract), as `raw::get_fmu_state` asks.
     unsafe { with(c, "fmi2GetFMUstate", |w| raw::get_fmu_state(&mut w.instance, state)) }
 }
 
@@ -364,6 +403,8 @@ pub unsafe fn get_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
 /// # Safety
 /// Arguments as in the FMI 2.0 standard: `state` from this FMU.
 pub unsafe fn set_fmu_state(c: Component, state: FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component (this function's contract); `state` is a number,
+    // never read through.
     unsafe { with(c, "fmi2SetFMUstate", |w| raw::set_fmu_state(&mut w.instance, state)) }
 }
 
@@ -372,6 +413,8 @@ pub unsafe fn set_fmu_state(c: Component, state: FmuState) -> RawStatus {
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn free_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `state` is NULL or the host's handle, readable
+    // and writable for the call (this function's contract), as `raw::free_fmu_state` asks.
     unsafe { with(c, "fmi2FreeFMUstate", |w| raw::free_fmu_state(&mut w.instance, state)) }
 }
 
@@ -380,6 +423,8 @@ pub unsafe fn free_fmu_state(c: Component, state: *mut FmuState) -> RawStatus {
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn serialized_fmu_state_size(c: Component, state: FmuState, size: *mut usize) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `size` is NULL or the host's writable `size_t`
+    // for the call (this function's contract), as `raw::serialized_fmu_state_size` asks.
     unsafe { with(c, "fmi2SerializedFMUstateSize", |w| raw::serialized_fmu_state_size(&mut w.instance, state, size)) }
 }
 
@@ -388,6 +433,8 @@ pub unsafe fn serialized_fmu_state_size(c: Component, state: FmuState, size: *mu
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn serialize_fmu_state(c: Component, state: FmuState, out: *mut u8, size: usize) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `out` is NULL or `size` writable bytes of the
+    // host's for the call (this function's contract), as `raw::serialize_fmu_state` asks.
     unsafe { with(c, "fmi2SerializeFMUstate", |w| raw::serialize_fmu_state(&mut w.instance, state, out, size)) }
 }
 
@@ -396,6 +443,9 @@ pub unsafe fn serialize_fmu_state(c: Component, state: FmuState, out: *mut u8, s
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn deserialize_fmu_state(c: Component, bytes: *const u8, size: usize, state: *mut FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `bytes` is NULL or `size` readable bytes and
+    // `state` NULL or the host's readable and writable handle, for the call (this function's
+    // contract), as `raw::deserialize_fmu_state` asks.
     unsafe { with(c, "fmi2DeSerializeFMUstate", |w| raw::deserialize_fmu_state(&mut w.instance, bytes, size, state)) }
 }
 
@@ -404,6 +454,7 @@ pub unsafe fn deserialize_fmu_state(c: Component, bytes: *const u8, size: usize,
 /// # Safety
 /// `c` as in the FMI 2.0 standard.
 pub unsafe fn do_step(c: Component, current: f64, step: f64, _no_prior: c_int) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component (this function's contract); the rest are values.
     unsafe { with(c, "fmi2DoStep", |w| w.instance.do_step(current, step)) }
 }
 
@@ -413,6 +464,7 @@ pub unsafe fn do_step(c: Component, current: f64, step: f64, _no_prior: c_int) -
 /// # Safety
 /// `c` as in the FMI 2.0 standard.
 pub unsafe fn unsupported(c: Component, name: &str, function: Function, why: &str) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component (this function's contract).
     unsafe {
         with(c, name, |w| match w.instance.check_phase(name, function) {
             Err(s) => s,
@@ -430,6 +482,8 @@ fn kind_name(kind: c_int) -> &'static str {
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_real_status(c: Component, kind: c_int, value: *mut f64) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `value` is NULL (checked before the write) or
+    // the host's writable real for the call (this function's contract).
     unsafe {
         with(c, "fmi2GetRealStatus", |w| {
             if value.is_null() {
@@ -454,6 +508,8 @@ pub unsafe fn get_real_status(c: Component, kind: c_int, value: *mut f64) -> Raw
 /// # Safety
 /// Arguments as in the FMI 2.0 standard.
 pub unsafe fn get_boolean_status(c: Component, kind: c_int, value: *mut c_int) -> RawStatus {
+    // SAFETY: `c` is NULL or a live component; `value` is NULL (checked before the write) or
+    // the host's writable `fmi2Boolean` for the call (this function's contract).
     unsafe {
         with(c, "fmi2GetBooleanStatus", |w| {
             if value.is_null() {
@@ -480,6 +536,8 @@ pub unsafe fn get_boolean_status(c: Component, kind: c_int, value: *mut c_int) -
 /// `c` as in the FMI 2.0 standard.
 pub unsafe fn status_without_value(c: Component, name: &str, kind: c_int) -> RawStatus {
     let why = format!("{} is only defined after fmi2DoStep returned fmi2Pending, which this FMU never does", kind_name(kind));
+    // SAFETY: `c` is NULL or a live component (this function's contract), all `unsupported`
+    // asks.
     unsafe { unsupported(c, name, Function::GetStatus, &why) }
 }
 
@@ -509,6 +567,8 @@ macro_rules! export_fmi2 {
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetDebugLogging(c: Component, on: c_int, n: usize, cats: *const *const c_char) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_debug_logging(c, on, n, cats) }
             }
             #[no_mangle]
@@ -521,87 +581,129 @@ macro_rules! export_fmi2 {
                 visible: c_int,
                 logging_on: c_int,
             ) -> Component {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged with this library's factory.
                 unsafe { abi::instantiate(super::__FMI2_EXPORT_FACTORY, name, fmu_type, guid, resources, functions, visible, logging_on) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2FreeInstance(c: Component) {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::free_instance(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetupExperiment(c: Component, td: c_int, tol: f64, start: f64, sd: c_int, stop: f64) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::setup_experiment(c, td, tol, start, sd, stop) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2EnterInitializationMode(c: Component) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::enter_initialization_mode(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2ExitInitializationMode(c: Component) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::exit_initialization_mode(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2Terminate(c: Component) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::terminate(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2Reset(c: Component) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::reset(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetReal(c: Component, vr: *const u32, n: usize, v: *mut f64) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_real(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetInteger(c: Component, vr: *const u32, n: usize, v: *mut c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_integer(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetBoolean(c: Component, vr: *const u32, n: usize, v: *mut c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_boolean(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetString(c: Component, vr: *const u32, n: usize, v: *mut *const c_char) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_string(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetReal(c: Component, vr: *const u32, n: usize, v: *const f64) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_real(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetInteger(c: Component, vr: *const u32, n: usize, v: *const c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_integer(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetBoolean(c: Component, vr: *const u32, n: usize, v: *const c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_boolean(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetString(c: Component, vr: *const u32, n: usize, v: *const *const c_char) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_string(c, vr, n, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetFMUstate(c: Component, s: *mut FmuState) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_fmu_state(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetFMUstate(c: Component, s: FmuState) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_fmu_state(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2FreeFMUstate(c: Component, s: *mut FmuState) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::free_fmu_state(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SerializedFMUstateSize(c: Component, s: FmuState, size: *mut usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::serialized_fmu_state_size(c, s, size) }
             }
             #[no_mangle]
-            pub unsafe extern "C" fn fmi2SerializeFMUstate(c: Component, s: FmuState, out: *mut u8, size: usize) -> RawStatus {
-                unsafe { abi::serialize_fmu_state(c, s, out, size) }
+            pub unsafe extern "C" fn fmi2SerializeFMUstate(c: Component, s: FmuState, out: *mut c_char, size: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged; its `fmi2Byte` buffer (a `char` array) is written as bytes.
+                unsafe { abi::serialize_fmu_state(c, s, out.cast::<u8>(), size) }
             }
             #[no_mangle]
-            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: Component, b: *const u8, size: usize, s: *mut FmuState) -> RawStatus {
-                unsafe { abi::deserialize_fmu_state(c, b, size, s) }
+            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: Component, b: *const c_char, size: usize, s: *mut FmuState) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged; its `fmi2Byte` buffer (a `char` array) is read as bytes.
+                unsafe { abi::deserialize_fmu_state(c, b.cast::<u8>(), size, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
@@ -613,6 +715,8 @@ macro_rules! export_fmi2 {
                 _dv_known: *const f64,
                 _dv_unknown: *mut f64,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe {
                     abi::unsupported(
                         c,
@@ -630,6 +734,8 @@ macro_rules! export_fmi2 {
                 _order: *const c_int,
                 _v: *const f64,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe {
                     abi::unsupported(c, "fmi2SetRealInputDerivatives", Function::SetRealInputDerivatives, "canInterpolateInputs is false")
                 }
@@ -642,36 +748,52 @@ macro_rules! export_fmi2 {
                 _order: *const c_int,
                 _v: *mut f64,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe {
                     abi::unsupported(c, "fmi2GetRealOutputDerivatives", Function::GetRealOutputDerivatives, "maxOutputDerivativeOrder is 0")
                 }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2DoStep(c: Component, t: f64, h: f64, no_prior: c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::do_step(c, t, h, no_prior) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2CancelStep(c: Component) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::unsupported(c, "fmi2CancelStep", Function::CancelStep, "steps are never asynchronous") }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetStatus(c: Component, kind: c_int, _v: *mut c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::status_without_value(c, "fmi2GetStatus", kind) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetRealStatus(c: Component, kind: c_int, v: *mut f64) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_real_status(c, kind, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetIntegerStatus(c: Component, kind: c_int, _v: *mut c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::status_without_value(c, "fmi2GetIntegerStatus", kind) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetBooleanStatus(c: Component, kind: c_int, v: *mut c_int) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_boolean_status(c, kind, v) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetStringStatus(c: Component, kind: c_int, _v: *mut *const c_char) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 2.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::status_without_value(c, "fmi2GetStringStatus", kind) }
             }
         }

@@ -14,8 +14,8 @@
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::PathBuf;
 
-use crate::instance::{Api, Function, Instance, LogSink, Status};
-use crate::raw::{self, catch_panic, slice, slice_mut, str_arg};
+use crate::instance::{Api, Function, Instance, InstantiateError, LogSink, Status};
+use crate::raw::{self, catch_panic, slice, slice_mut, str_arg, Refused};
 use crate::ModelFactory;
 
 use super::description::{Fmi3Type, Fmi3Variables};
@@ -28,6 +28,13 @@ pub use crate::raw::FmuState;
 pub type RawStatus = c_int;
 /// `fmi3LogMessageCallback`: not variadic in FMI 3.0, the message is plain text.
 pub type LogMessage = unsafe extern "C" fn(*mut c_void, c_int, *const c_char, *const c_char);
+/// `fmi3IntermediateUpdateCallback`: never called (no intermediate update, no early return).
+pub type IntermediateUpdate = unsafe extern "C" fn(*mut c_void, f64, bool, bool, bool, bool, *mut bool, *mut f64);
+/// `fmi3ClockUpdateCallback`: never called (no Scheduled Execution).
+pub type ClockUpdate = unsafe extern "C" fn(*mut c_void);
+/// `fmi3LockPreemptionCallback` and `fmi3UnlockPreemptionCallback`: never called (no
+/// Scheduled Execution).
+pub type Preemption = unsafe extern "C" fn();
 
 /// The host's logger and environment, callable from the instance.
 struct HostLogger {
@@ -91,12 +98,20 @@ impl Wrapper {
     }
 }
 
-// SAFETY (for all functions below): the host passes pointers as the FMI 3.0 standard
-// describes them; arrays have the lengths given with them.
+// The contract of the `unsafe fn`s below, which the FMI 3.0 standard sets for the host: `c`
+// is NULL or an instance that `instantiate_co_simulation` returned and `free_instance` has
+// not freed, with no other call on it running ("`c` as in the FMI 3.0 standard"); an array
+// is NULL or points to as many elements as the length passed with it; a string is NULL or
+// NUL-terminated; all are the host's, valid until the call returns ("arguments as in the FMI
+// 3.0 standard").
 
 /// Runs `body` on the instance behind `c`, turning a panic into `fmi3Fatal`.
+///
+/// # Safety
+/// `c` as in the FMI 3.0 standard.
 unsafe fn with(c: Fmi3Instance, name: &str, body: impl FnOnce(&mut Wrapper) -> Status) -> RawStatus {
-    // SAFETY: a non-null `c` is a Wrapper this API's fmi3InstantiateCoSimulation returned (standard).
+    // SAFETY: `c` is NULL or a live `Wrapper` of `instantiate_co_simulation`, used by this call
+    // alone (this function's contract), which is what `guarded::<Wrapper>` asks.
     unsafe { raw::guarded(c, name, body) }
 }
 
@@ -133,39 +148,48 @@ pub unsafe fn instantiate_co_simulation(
     log_message: Option<LogMessage>,
 ) -> Fmi3Instance {
     let host = || HostLogger { logger: log_message, environment: instance_environment };
-    let fail = |message: String| {
-        host().log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {message}"));
+    let fail = |why: &dyn std::fmt::Display| {
+        host().log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {why}"));
         std::ptr::null_mut()
     };
-    let result = catch_panic(|| -> Result<Fmi3Instance, String> {
+    let result = catch_panic(|| -> Result<Fmi3Instance, Refused> {
+        // SAFETY: `instance_name` is NULL or a NUL-terminated string of the host's, valid for the
+        // call (this function's contract); the name is copied before the call returns.
         let name = unsafe { str_arg(instance_name) }.unwrap_or("");
         if name.trim().is_empty() {
-            return Err(
-                "the instance name is NULL, empty, white space only or not UTF-8 (FMI 3.0 asks for at least one other character)".into()
-            );
+            return Err(Refused::Name("FMI 3.0 asks for at least one other character"));
         }
         if event_mode_used {
-            return Err("eventModeUsed is true, but this FMU has no event mode (hasEventMode=\"false\")".into());
+            return Err(Refused::EventMode);
         }
-        let token = unsafe { str_arg(instantiation_token) }.ok_or("the instantiation token is NULL or not UTF-8")?;
+        // SAFETY: `instantiation_token` and `resource_path` are NULL or NUL-terminated strings of
+        // the host's, valid for the call (this function's contract); both are read before it returns.
+        let token = unsafe { str_arg(instantiation_token) }.ok_or(Refused::NullOrNotUtf8("instantiation token"))?;
+        // SAFETY: as for `instantiation_token`.
         let resources = match unsafe { str_arg(resource_path) } {
             Some(path) => Some(PathBuf::from(path)),
             None if resource_path.is_null() => None,
-            None => return Err("the resource path is not UTF-8".into()),
+            None => return Err(Refused::NotUtf8("resource path")),
         };
-        let model = factory(resources.as_deref()).map_err(|e| e.to_string())?;
+        let model = factory(resources.as_deref()).map_err(Refused::Model)?;
         let variables = Fmi3Variables::new(model.description());
         let sink_host = host();
         let sink: LogSink = Box::new(move |status, category, message| sink_host.log(status, category, message));
-        let instance = Instance::new(name, token, model, sink, logging_on)
-            .map_err(|e| e.to_string().replace("GUID", "instantiation token"))?
-            .with_api(Api::Fmi3);
+        let instance = Instance::new(name, token, model, sink, logging_on).map_err(in_fmi3_words)?.with_api(Api::Fmi3);
         Ok(Box::into_raw(Box::new(Wrapper { instance, variables, scratch: Vec::new(), strings: Vec::new() })) as Fmi3Instance)
     });
     match result {
         Ok(Ok(c)) => c,
-        Ok(Err(message)) => fail(message),
-        Err(why) => fail(format!("internal error ({why})")),
+        Ok(Err(refused)) => fail(&refused),
+        Err(why) => fail(&format_args!("internal error ({why})")),
+    }
+}
+
+/// An instance's refusal in FMI 3.0's words: the model's GUID is its instantiation token.
+fn in_fmi3_words(error: InstantiateError) -> Refused {
+    match error {
+        InstantiateError::WrongGuid { given, expected } => Refused::WrongToken { given, expected },
+        other => Refused::Instance(other),
     }
 }
 
@@ -186,6 +210,8 @@ pub unsafe fn instantiate_other(function: &str, instance_environment: *mut c_voi
 /// `c` is NULL or an instance from [`instantiate_co_simulation`] not freed before.
 pub unsafe fn free_instance(c: Fmi3Instance) {
     if !c.is_null() {
+        // SAFETY: a non-null `c` is the `Box<Wrapper>` that `instantiate_co_simulation` leaked and
+        // nothing has freed (this function's contract); the host makes no call on it after this one.
         let _ = catch_panic(|| drop(unsafe { Box::from_raw(c as *mut Wrapper) }));
     }
 }
@@ -195,6 +221,8 @@ pub unsafe fn free_instance(c: Fmi3Instance) {
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_debug_logging(c: Fmi3Instance, on: bool, n: usize, categories: *const *const c_char) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `categories` is NULL or `n` pointers, each NULL
+    // or a NUL-terminated string, all the host's for the call (this function's contract).
     unsafe {
         with(c, "fmi3SetDebugLogging", |w| {
             let Some(ptrs) = slice(categories, n) else {
@@ -225,6 +253,7 @@ pub unsafe fn enter_initialization_mode(
     stop_time_defined: bool,
     stop_time: f64,
 ) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance (this function's contract); the rest are values.
     unsafe {
         with(c, "fmi3EnterInitializationMode", |w| {
             let s = w.instance.setup_experiment(tolerance_defined.then_some(tolerance), start_time, stop_time_defined.then_some(stop_time));
@@ -243,6 +272,7 @@ macro_rules! simple {
         /// # Safety
         /// `c` as in the FMI 3.0 standard.
         pub unsafe fn $fn_name(c: Fmi3Instance) -> RawStatus {
+            // SAFETY: `c` is NULL or a live instance (this function's contract).
             unsafe { with(c, $c_name, |w| w.instance.$method()) }
         }
     )*};
@@ -259,6 +289,10 @@ simple! {
 
 /// The part every `fmi3Get<Type>` shares: the arrays from their pointers, the value
 /// references checked against `ty` and translated into `w.scratch`, then `read` fills `out`.
+///
+/// # Safety
+/// `c` as in the FMI 3.0 standard; `vr` is NULL or `n` value references and `values` NULL or
+/// room for `n_values` values, the host's for the call.
 #[allow(clippy::too_many_arguments)] // the C arguments, and what differs per type
 unsafe fn get_values<T>(
     c: Fmi3Instance,
@@ -270,6 +304,9 @@ unsafe fn get_values<T>(
     n_values: usize,
     read: impl FnOnce(&mut Wrapper, &mut [T]) -> Status,
 ) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `vr` is NULL or `n` value references and `values`
+    // NULL or room for `n_values` values, the host's for the call (this function's contract),
+    // which is what `slice` and `slice_mut` ask.
     unsafe {
         with(c, function, |w| match (slice(vr, n), slice_mut(values, n_values)) {
             (Some(vr), Some(out)) => match w.translate(function, ty, vr, out.len()) {
@@ -283,6 +320,10 @@ unsafe fn get_values<T>(
 
 /// As [`get_values`] for `fmi3Set<Type>`: `write` gets the host's value references (for
 /// messages) and values.
+///
+/// # Safety
+/// `c` as in the FMI 3.0 standard; `vr` is NULL or `n` value references and `values` NULL or
+/// `n_values` values, the host's for the call.
 #[allow(clippy::too_many_arguments)] // the C arguments, and what differs per type
 unsafe fn set_values<T>(
     c: Fmi3Instance,
@@ -294,6 +335,9 @@ unsafe fn set_values<T>(
     n_values: usize,
     write: impl FnOnce(&mut Wrapper, &[u32], &[T]) -> Status,
 ) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `vr` is NULL or `n` value references and `values`
+    // NULL or `n_values` values, the host's for the call (this function's contract), which is
+    // what `slice` asks.
     unsafe {
         with(c, function, |w| match (slice(vr, n), slice(values, n_values)) {
             (Some(vr), Some(v)) => match w.translate(function, ty, vr, v.len()) {
@@ -310,6 +354,8 @@ unsafe fn set_values<T>(
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut f64, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `get_values` asks.
     unsafe { get_values(c, "fmi3GetFloat64", Fmi3Type::Float64, vr, n, values, n_values, |w, out| w.instance.get_real(&w.scratch, out)) }
 }
 
@@ -318,6 +364,8 @@ pub unsafe fn get_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mu
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *const f64, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `set_values` asks.
     unsafe { set_values(c, "fmi3SetFloat64", Fmi3Type::Float64, vr, n, values, n_values, |w, _, v| w.instance.set_real(&w.scratch, v)) }
 }
 
@@ -326,6 +374,8 @@ pub unsafe fn set_float64(c: Fmi3Instance, vr: *const u32, n: usize, values: *co
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut i32, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `get_values` asks.
     unsafe { get_values(c, "fmi3GetInt32", Fmi3Type::Int32, vr, n, values, n_values, |w, out| w.instance.get_integer(&w.scratch, out)) }
 }
 
@@ -334,6 +384,8 @@ pub unsafe fn get_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut 
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *const i32, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `set_values` asks.
     unsafe { set_values(c, "fmi3SetInt32", Fmi3Type::Int32, vr, n, values, n_values, |w, _, v| w.instance.set_integer(&w.scratch, v)) }
 }
 
@@ -342,6 +394,8 @@ pub unsafe fn set_int32(c: Fmi3Instance, vr: *const u32, n: usize, values: *cons
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut i64, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `get_values` asks.
     unsafe {
         get_values(c, "fmi3GetInt64", Fmi3Type::Enumeration, vr, n, values, n_values, |w, out| {
             let mut narrow = vec![0i32; out.len()];
@@ -361,6 +415,8 @@ pub unsafe fn get_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut 
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *const i64, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `set_values` asks.
     unsafe {
         set_values(c, "fmi3SetInt64", Fmi3Type::Enumeration, vr, n, values, n_values, |w, vr, v| {
             let mut narrow = Vec::with_capacity(v.len());
@@ -383,6 +439,8 @@ pub unsafe fn set_int64(c: Fmi3Instance, vr: *const u32, n: usize, values: *cons
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut bool, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `get_values` asks.
     unsafe { get_values(c, "fmi3GetBoolean", Fmi3Type::Boolean, vr, n, values, n_values, |w, out| w.instance.get_boolean(&w.scratch, out)) }
 }
 
@@ -392,6 +450,8 @@ pub unsafe fn get_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *mu
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *const u8, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `set_values` asks; the values are read as bytes, so no invalid `bool` is made.
     unsafe {
         set_values(c, "fmi3SetBoolean", Fmi3Type::Boolean, vr, n, values, n_values, |w, _, v| {
             let b: Vec<bool> = v.iter().map(|&x| x != 0).collect();
@@ -405,6 +465,9 @@ pub unsafe fn set_boolean(c: Fmi3Instance, vr: *const u32, n: usize, values: *co
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut *const c_char, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `get_values` asks. The pointers written point into `w.strings`, which outlives the call
+    // as the standard asks.
     unsafe {
         get_values(c, "fmi3GetString", Fmi3Type::String, vr, n, values, n_values, |w, out| {
             let mut s = vec![String::new(); out.len()];
@@ -425,6 +488,9 @@ pub unsafe fn get_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *mut
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn set_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *const *const c_char, n_values: usize) -> RawStatus {
+    // SAFETY: arguments as in the FMI 3.0 standard (this function's contract), which is what
+    // `set_values` asks; each value is NULL or a NUL-terminated string for the call, copied
+    // before it returns.
     unsafe {
         set_values(c, "fmi3SetString", Fmi3Type::String, vr, n, values, n_values, |w, _, v| {
             let mut strings = Vec::with_capacity(v.len());
@@ -446,6 +512,8 @@ pub unsafe fn set_string(c: Fmi3Instance, vr: *const u32, n: usize, values: *con
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn no_such_type(c: Fmi3Instance, function: &str, type_name: &str, setter: bool, vr: *const u32, n: usize) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `vr` is NULL or `n` value references of the
+    // host's for the call (this function's contract); the values are never touched.
     unsafe {
         with(c, function, |w| {
             let phase = if setter { Function::SetOther } else { Function::GetValues };
@@ -472,6 +540,8 @@ pub unsafe fn no_such_type(c: Fmi3Instance, function: &str, type_name: &str, set
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn get_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `state` is NULL or the host's handle, readable
+    // and writable for the call (this function's contract), as `raw::get_fmu_state` asks.
     unsafe { with(c, "fmi3GetFMUState", |w| raw::get_fmu_state(&mut w.instance, state)) }
 }
 
@@ -480,6 +550,8 @@ pub unsafe fn get_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus 
 /// # Safety
 /// Arguments as in the FMI 3.0 standard: `state` from this FMU.
 pub unsafe fn set_fmu_state(c: Fmi3Instance, state: FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance (this function's contract); `state` is a number,
+    // never read through.
     unsafe { with(c, "fmi3SetFMUState", |w| raw::set_fmu_state(&mut w.instance, state)) }
 }
 
@@ -488,6 +560,8 @@ pub unsafe fn set_fmu_state(c: Fmi3Instance, state: FmuState) -> RawStatus {
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn free_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `state` is NULL or the host's handle, readable
+    // and writable for the call (this function's contract), as `raw::free_fmu_state` asks.
     unsafe { with(c, "fmi3FreeFMUState", |w| raw::free_fmu_state(&mut w.instance, state)) }
 }
 
@@ -496,6 +570,8 @@ pub unsafe fn free_fmu_state(c: Fmi3Instance, state: *mut FmuState) -> RawStatus
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn serialized_fmu_state_size(c: Fmi3Instance, state: FmuState, size: *mut usize) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `size` is NULL or the host's writable `size_t`
+    // for the call (this function's contract), as `raw::serialized_fmu_state_size` asks.
     unsafe { with(c, "fmi3SerializedFMUStateSize", |w| raw::serialized_fmu_state_size(&mut w.instance, state, size)) }
 }
 
@@ -504,6 +580,8 @@ pub unsafe fn serialized_fmu_state_size(c: Fmi3Instance, state: FmuState, size: 
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn serialize_fmu_state(c: Fmi3Instance, state: FmuState, out: *mut u8, size: usize) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `out` is NULL or `size` writable bytes of the
+    // host's for the call (this function's contract), as `raw::serialize_fmu_state` asks.
     unsafe { with(c, "fmi3SerializeFMUState", |w| raw::serialize_fmu_state(&mut w.instance, state, out, size)) }
 }
 
@@ -512,6 +590,9 @@ pub unsafe fn serialize_fmu_state(c: Fmi3Instance, state: FmuState, out: *mut u8
 /// # Safety
 /// Arguments as in the FMI 3.0 standard.
 pub unsafe fn deserialize_fmu_state(c: Fmi3Instance, bytes: *const u8, size: usize, state: *mut FmuState) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; `bytes` is NULL or `size` readable bytes and
+    // `state` NULL or the host's readable and writable handle, for the call (this function's
+    // contract), as `raw::deserialize_fmu_state` asks.
     unsafe { with(c, "fmi3DeserializeFMUState", |w| raw::deserialize_fmu_state(&mut w.instance, bytes, size, state)) }
 }
 
@@ -533,6 +614,8 @@ pub unsafe fn do_step(
     early_return: *mut bool,
     last_successful_time: *mut f64,
 ) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance; the four output pointers are NULL (checked before
+    // any write) or the host's writable variables for the call (this function's contract).
     unsafe {
         with(c, "fmi3DoStep", |w| {
             if event_handling_needed.is_null() || terminate_simulation.is_null() || early_return.is_null() || last_successful_time.is_null()
@@ -561,6 +644,7 @@ pub unsafe fn do_step(
 /// # Safety
 /// `c` as in the FMI 3.0 standard.
 pub unsafe fn unsupported(c: Fmi3Instance, name: &str, why: &str) -> RawStatus {
+    // SAFETY: `c` is NULL or a live instance (this function's contract).
     unsafe { with(c, name, |w| w.instance.error(&format!("{name}: not supported: {why}"))) }
 }
 
@@ -584,7 +668,10 @@ macro_rules! export_fmi3 {
         #[allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
         mod fmi3_exports {
             use std::ffi::{c_char, c_int, c_void};
-            use $crate::fmi3::abi::{self, Fmi3Instance, FmuState, LogMessage, RawStatus, CO_SIMULATION_ONLY, NO_EVENT_MODE};
+            use $crate::fmi3::abi::{
+                self, ClockUpdate, Fmi3Instance, FmuState, IntermediateUpdate, LogMessage, Preemption, RawStatus, CO_SIMULATION_ONLY,
+                NO_EVENT_MODE,
+            };
 
             #[no_mangle]
             pub extern "C" fn fmi3GetVersion() -> *const c_char {
@@ -592,6 +679,8 @@ macro_rules! export_fmi3 {
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetDebugLogging(c: Fmi3Instance, on: bool, n: usize, cats: *const *const c_char) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_debug_logging(c, on, n, cats) }
             }
             #[no_mangle]
@@ -604,6 +693,8 @@ macro_rules! export_fmi3 {
                 env: *mut c_void,
                 log: Option<LogMessage>,
             ) -> Fmi3Instance {
+                // SAFETY: `log` is NULL or the host's logger for `env` (the FMI 3.0 standard); nothing
+                // else is read.
                 unsafe { abi::instantiate_other("fmi3InstantiateModelExchange", env, log) }
             }
             #[no_mangle]
@@ -619,8 +710,10 @@ macro_rules! export_fmi3 {
                 n_required: usize,
                 env: *mut c_void,
                 log: Option<LogMessage>,
-                _intermediate_update: *const c_void,
+                _intermediate_update: Option<IntermediateUpdate>,
             ) -> Fmi3Instance {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged with this library's factory; `intermediate_update` is never called.
                 unsafe {
                     abi::instantiate_co_simulation(
                         super::__FMI3_EXPORT_FACTORY,
@@ -647,14 +740,18 @@ macro_rules! export_fmi3 {
                 _logging_on: bool,
                 env: *mut c_void,
                 log: Option<LogMessage>,
-                _clock_update: *const c_void,
-                _lock: *const c_void,
-                _unlock: *const c_void,
+                _clock_update: Option<ClockUpdate>,
+                _lock: Option<Preemption>,
+                _unlock: Option<Preemption>,
             ) -> Fmi3Instance {
+                // SAFETY: `log` is NULL or the host's logger for `env` (the FMI 3.0 standard); nothing
+                // else is read.
                 unsafe { abi::instantiate_other("fmi3InstantiateScheduledExecution", env, log) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3FreeInstance(c: Fmi3Instance) {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::free_instance(c) }
             }
             #[no_mangle]
@@ -666,55 +763,81 @@ macro_rules! export_fmi3 {
                 sd: bool,
                 stop: f64,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::enter_initialization_mode(c, td, tol, start, sd, stop) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ExitInitializationMode(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::exit_initialization_mode(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterEventMode(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3EnterEventMode", NO_EVENT_MODE) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3Terminate(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::terminate(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3Reset(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::reset(c) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetFloat64(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut f64, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_float64(c, vr, n, v, nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetFloat64(c: Fmi3Instance, vr: *const u32, n: usize, v: *const f64, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_float64(c, vr, n, v, nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetInt32(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut i32, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_int32(c, vr, n, v, nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetInt32(c: Fmi3Instance, vr: *const u32, n: usize, v: *const i32, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_int32(c, vr, n, v, nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetInt64(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut i64, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_int64(c, vr, n, v, nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetInt64(c: Fmi3Instance, vr: *const u32, n: usize, v: *const i64, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_int64(c, vr, n, v, nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetBoolean(c: Fmi3Instance, vr: *const u32, n: usize, v: *mut bool, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_boolean(c, vr, n, v, nv) }
             }
             #[no_mangle]
-            pub unsafe extern "C" fn fmi3SetBoolean(c: Fmi3Instance, vr: *const u32, n: usize, v: *const u8, nv: usize) -> RawStatus {
-                unsafe { abi::set_boolean(c, vr, n, v, nv) }
+            pub unsafe extern "C" fn fmi3SetBoolean(c: Fmi3Instance, vr: *const u32, n: usize, v: *const bool, nv: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged; the values are read as bytes, so a host's `bool` other than 0 or 1
+                // makes no invalid Rust `bool`.
+                unsafe { abi::set_boolean(c, vr, n, v.cast::<u8>(), nv) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetString(
@@ -724,6 +847,8 @@ macro_rules! export_fmi3 {
                 v: *mut *const c_char,
                 nv: usize,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_string(c, vr, n, v, nv) }
             }
             #[no_mangle]
@@ -734,6 +859,8 @@ macro_rules! export_fmi3 {
                 v: *const *const c_char,
                 nv: usize,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_string(c, vr, n, v, nv) }
             }
             $crate::__fmi3_no_such_type! {
@@ -761,6 +888,8 @@ macro_rules! export_fmi3 {
                 _v: *mut *const u8,
                 _nv: usize,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance and `vr` NULL or `n` value references (the FMI
+                // 3.0 standard); the values are never touched.
                 unsafe { abi::no_such_type(c, "fmi3GetBinary", "Binary", false, vr, n) }
             }
             #[no_mangle]
@@ -772,18 +901,25 @@ macro_rules! export_fmi3 {
                 _v: *const *const u8,
                 _nv: usize,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance and `vr` NULL or `n` value references (the FMI
+                // 3.0 standard); the values are never touched.
                 unsafe { abi::no_such_type(c, "fmi3SetBinary", "Binary", true, vr, n) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetClock(c: Fmi3Instance, vr: *const u32, n: usize, _v: *mut bool) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance and `vr` NULL or `n` value references (the FMI
+                // 3.0 standard); the values are never touched.
                 unsafe { abi::no_such_type(c, "fmi3GetClock", "Clock", false, vr, n) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetClock(c: Fmi3Instance, vr: *const u32, n: usize, _v: *const bool) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance and `vr` NULL or `n` value references (the FMI
+                // 3.0 standard); the values are never touched.
                 unsafe { abi::no_such_type(c, "fmi3SetClock", "Clock", true, vr, n) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNumberOfVariableDependencies(c: Fmi3Instance, _vr: u32, _n: *mut usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe {
                     abi::unsupported(
                         c,
@@ -802,6 +938,7 @@ macro_rules! export_fmi3 {
                 _kinds: *mut c_int,
                 _n: usize,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe {
                     abi::unsupported(
                         c,
@@ -812,22 +949,32 @@ macro_rules! export_fmi3 {
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetFMUState(c: Fmi3Instance, s: *mut FmuState) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::get_fmu_state(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetFMUState(c: Fmi3Instance, s: FmuState) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::set_fmu_state(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3FreeFMUState(c: Fmi3Instance, s: *mut FmuState) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::free_fmu_state(c, s) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SerializedFMUStateSize(c: Fmi3Instance, s: FmuState, size: *mut usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::serialized_fmu_state_size(c, s, size) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SerializeFMUState(c: Fmi3Instance, s: FmuState, out: *mut u8, size: usize) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::serialize_fmu_state(c, s, out, size) }
             }
             #[no_mangle]
@@ -837,6 +984,8 @@ macro_rules! export_fmi3 {
                 size: usize,
                 s: *mut FmuState,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe { abi::deserialize_fmu_state(c, bytes, size, s) }
             }
             #[no_mangle]
@@ -851,6 +1000,7 @@ macro_rules! export_fmi3 {
                 _sensitivity: *mut f64,
                 _n_sensitivity: usize,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetDirectionalDerivative", "providesDirectionalDerivatives is false") }
             }
             #[no_mangle]
@@ -865,14 +1015,17 @@ macro_rules! export_fmi3 {
                 _sensitivity: *mut f64,
                 _n_sensitivity: usize,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetAdjointDerivative", "providesAdjointDerivatives is false") }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterConfigurationMode(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3EnterConfigurationMode", "this FMU has no structural parameters") }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ExitConfigurationMode(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3ExitConfigurationMode", "this FMU has no structural parameters") }
             }
             #[no_mangle]
@@ -883,6 +1036,7 @@ macro_rules! export_fmi3 {
                 _i: *mut f64,
                 _q: *mut c_int,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetIntervalDecimal", NO_EVENT_MODE) }
             }
             #[no_mangle]
@@ -894,10 +1048,12 @@ macro_rules! export_fmi3 {
                 _r: *mut u64,
                 _q: *mut c_int,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetIntervalFraction", NO_EVENT_MODE) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetShiftDecimal(c: Fmi3Instance, _vr: *const u32, _n: usize, _s: *mut f64) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetShiftDecimal", NO_EVENT_MODE) }
             }
             #[no_mangle]
@@ -908,10 +1064,12 @@ macro_rules! export_fmi3 {
                 _counters: *mut u64,
                 _r: *mut u64,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetShiftFraction", NO_EVENT_MODE) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetIntervalDecimal(c: Fmi3Instance, _vr: *const u32, _n: usize, _i: *const f64) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3SetIntervalDecimal", NO_EVENT_MODE) }
             }
             #[no_mangle]
@@ -922,10 +1080,12 @@ macro_rules! export_fmi3 {
                 _counters: *const u64,
                 _r: *const u64,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3SetIntervalFraction", NO_EVENT_MODE) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetShiftDecimal(c: Fmi3Instance, _vr: *const u32, _n: usize, _s: *const f64) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3SetShiftDecimal", NO_EVENT_MODE) }
             }
             #[no_mangle]
@@ -936,10 +1096,12 @@ macro_rules! export_fmi3 {
                 _counters: *const u64,
                 _r: *const u64,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3SetShiftFraction", NO_EVENT_MODE) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EvaluateDiscreteStates(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3EvaluateDiscreteStates", NO_EVENT_MODE) }
             }
             #[no_mangle]
@@ -952,10 +1114,12 @@ macro_rules! export_fmi3 {
                 _next_event_time_defined: *mut bool,
                 _next_event_time: *mut f64,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3UpdateDiscreteStates", NO_EVENT_MODE) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3EnterContinuousTimeMode", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
@@ -965,42 +1129,52 @@ macro_rules! export_fmi3 {
                 _enter_event_mode: *mut bool,
                 _terminate: *mut bool,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3CompletedIntegratorStep", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetTime(c: Fmi3Instance, _time: f64) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3SetTime", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3SetContinuousStates(c: Fmi3Instance, _x: *const f64, _n: usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3SetContinuousStates", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(c: Fmi3Instance, _dx: *mut f64, _n: usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetContinuousStateDerivatives", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetEventIndicators(c: Fmi3Instance, _z: *mut f64, _n: usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetEventIndicators", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetContinuousStates(c: Fmi3Instance, _x: *mut f64, _n: usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetContinuousStates", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(c: Fmi3Instance, _x: *mut f64, _n: usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetNominalsOfContinuousStates", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(c: Fmi3Instance, _n: *mut usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetNumberOfEventIndicators", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(c: Fmi3Instance, _n: *mut usize) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetNumberOfContinuousStates", CO_SIMULATION_ONLY) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3EnterStepMode(c: Fmi3Instance) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3EnterStepMode", "event mode is not used: fmi3ExitInitializationMode enters step mode") }
             }
             #[no_mangle]
@@ -1012,6 +1186,7 @@ macro_rules! export_fmi3 {
                 _v: *mut f64,
                 _nv: usize,
             ) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3GetOutputDerivatives", "maxOutputDerivativeOrder is 0") }
             }
             #[no_mangle]
@@ -1025,6 +1200,8 @@ macro_rules! export_fmi3 {
                 early_return: *mut bool,
                 last_successful_time: *mut f64,
             ) -> RawStatus {
+                // SAFETY: the host's arguments, valid as the FMI 3.0 standard says (see `abi`), passed
+                // on unchanged.
                 unsafe {
                     abi::do_step(
                         c,
@@ -1040,6 +1217,7 @@ macro_rules! export_fmi3 {
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi3ActivateModelPartition(c: Fmi3Instance, _clock: u32, _time: f64) -> RawStatus {
+                // SAFETY: `c` is NULL or a live instance (the FMI 3.0 standard); nothing else is read.
                 unsafe { abi::unsupported(c, "fmi3ActivateModelPartition", "this FMU supports only Co-Simulation") }
             }
         }
@@ -1056,12 +1234,16 @@ macro_rules! __fmi3_no_such_type {
     (@one $name:ident $type_name:literal get $t:ty) => {
         #[no_mangle]
         pub unsafe extern "C" fn $name(c: Fmi3Instance, vr: *const u32, n: usize, _v: *mut $t, _nv: usize) -> RawStatus {
+            // SAFETY: `c` is NULL or a live instance and `vr` NULL or `n` value references (the FMI
+            // 3.0 standard); the values are never touched.
             unsafe { abi::no_such_type(c, stringify!($name), $type_name, false, vr, n) }
         }
     };
     (@one $name:ident $type_name:literal set $t:ty) => {
         #[no_mangle]
         pub unsafe extern "C" fn $name(c: Fmi3Instance, vr: *const u32, n: usize, _v: *const $t, _nv: usize) -> RawStatus {
+            // SAFETY: `c` is NULL or a live instance and `vr` NULL or `n` value references (the FMI
+            // 3.0 standard); the values are never touched.
             unsafe { abi::no_such_type(c, stringify!($name), $type_name, true, vr, n) }
         }
     };

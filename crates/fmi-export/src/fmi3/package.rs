@@ -10,12 +10,12 @@
 
 use std::path::Path;
 
-use crate::package::{documentation_page, macho_architectures, read_binaries, write_archive};
+use crate::package::{documentation_page, macho_architectures, read_binaries, write_archive, BinaryError};
 use crate::ModelDescription;
 
 /// The FMI 3.0 platform folders (section 2.5.1.2) of a library built for the FMI 2.0 platform
 /// `platform`, given its bytes (a macOS library holds one or two architectures).
-pub fn platform_folders(platform: &str, bytes: &[u8]) -> Result<Vec<&'static str>, String> {
+pub fn platform_folders(platform: &str, bytes: &[u8]) -> Result<Vec<&'static str>, BinaryError> {
     Ok(match platform {
         "linux64" => vec!["x86_64-linux"],
         "linux32" => vec!["x86-linux"],
@@ -26,13 +26,13 @@ pub fn platform_folders(platform: &str, bytes: &[u8]) -> Result<Vec<&'static str
         "darwin64" => {
             let mut folders = Vec::new();
             for (architecture, folder) in [("x86_64", "x86_64-darwin"), ("arm64", "aarch64-darwin")] {
-                if macho_architectures(bytes).map_err(|e| e.to_string())?.contains(&architecture) {
+                if macho_architectures(bytes)?.contains(&architecture) {
                     folders.push(folder);
                 }
             }
             folders
         }
-        other => return Err(format!("no FMI 3.0 platform folder known for {other:?}")),
+        other => return Err(BinaryError::NoFmi3Folder(other.to_owned())),
     })
 }
 
