@@ -229,7 +229,7 @@ pub fn compensator_from_logs(
         files.push(pairs_path.clone());
         files.extend(report);
         say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
-        let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed)?;
+        let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed).map_err(|e| format!("{e:#}"))?;
         let net_path = job.work.join(format!("friction_{joint}.json"));
         write_text_atomic(&net_path, &net.to_json()).map_err(|e| format!("writing {}: {e}", net_path.display()))?;
         files.push(net_path.clone());
@@ -255,7 +255,7 @@ pub fn compensator_from_logs(
         let hidden = gravity_hidden(pairs.len(), n);
         say(&format!("training the gravity net ({hidden} hidden neurons) on {} pairs", pairs.len()));
         let settings = Settings { gravity_hidden: hidden, ..settings.clone() };
-        let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch)?;
+        let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch).map_err(|e| format!("{e:#}"))?;
         let net_path = job.work.join("gravity.json");
         write_text_atomic(&net_path, &net.to_json()).map_err(|e| format!("writing {}: {e}", net_path.display()))?;
         files.push(net_path.clone());
