@@ -27,7 +27,7 @@ pub enum FrictionHold {
     /// ω = [`FRICTION_HOLD_RAD_S`](neurarm_physics::control::holds::FRICTION_HOLD_RAD_S)), c the
     /// Coriolis and centrifugal torques, and S = H_hh − H_hf H_fh / H_ff the held joints'
     /// inertia while the driven joint f moves freely
-    /// ([`friction_hold_torques_into`](neurarm_physics::control::holds::friction_hold_torques_into)).
+    /// ([`friction_hold_torques_into`]).
     /// Then S q̈_h = S u_h − H_hf q̈_f: the held joints settle exactly once the driven one runs
     /// at constant speed, in every pose, so the coupling no longer bends the measurement.
     Rigid,
@@ -154,8 +154,7 @@ const OVERSHOOT_SPACINGS: f64 = 3.0;
 /// steady speed passes `settings.max_velocity`. Each level lasts until the measured
 /// level's last window passes the steadiness test of [`FrictionOptions`] (at most 20 s). The step
 /// between levels aims at `velocity_spacing` from the local slope of the levels so far. With
-/// the rigid hold, speed-held levels then fill what the constant torques left out
-/// ([`speed_held_levels`]).
+/// the rigid hold, speed-held levels then fill the speeds the constant torques jumped over.
 pub fn friction_run(
     arm_fmu: &Path,
     controller: &Path,

@@ -52,7 +52,7 @@ pub fn sampled_poses(poses: usize, joints: usize, seed: u64) -> Vec<Vec<f64>> {
 }
 
 /// [`sampled_poses`] with each pose's place in the draw: the poses drawn first N of a larger
-/// design are themselves a uniform design of N poses (what [`gravity_study`] uses).
+/// design are themselves a uniform design of N poses (what [`gravity_study`](super::gravity_study::gravity_study) uses).
 pub fn sampled_poses_drawn(poses: usize, joints: usize, seed: u64) -> Vec<(usize, Vec<f64>)> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut left: Vec<(usize, Vec<f64>)> = (0..poses).map(|i| (i, (0..joints).map(|_| rng.gen::<f64>() * 2.0 * PI).collect())).collect();

@@ -63,7 +63,7 @@ pub struct Settings {
     /// Hidden neurons of the gravity net (the paper: 25).
     pub gravity_hidden: usize,
     /// Position gain of the joint-space gravity-compensation loop [N·m/rad] for the built-in
-    /// arm; scaled for other arms when `scale_joint_gains` (see [`joint_loop_gains`]).
+    /// arm; scaled for other arms when `scale_joint_gains` (see [`joint_loop_gains`](super::joint_loop_gains)).
     pub joint_kp: f64,
     /// Velocity gain of that loop [N·m·s/rad] (0 in the paper's law), scaled likewise.
     pub joint_kd: f64,
