@@ -265,8 +265,7 @@ pub struct GravityPlan {
 /// Plans the gravity sweep: for each pose of the design a smooth move to just below it, then
 /// every joint up through it and back down at constant speed (the paper's sweep).
 pub fn gravity_plan(joints: usize, settings: &GravityPlanSettings) -> Result<GravityPlan> {
-    // `GravityDesign::check` (the experiments') says what is wrong in words.
-    settings.design.check(joints).map_err(anyhow::Error::msg)?;
+    settings.design.check(joints)?;
     if !(settings.speed_rad_s > 0.0 && settings.speed_rad_s.is_finite() && settings.pass_s >= 0.1 && settings.pass_s.is_finite()) {
         bail!("need a pass speed > 0 and passes of at least 0.1 s (got {} rad/s, {} s)", settings.speed_rad_s, settings.pass_s);
     }

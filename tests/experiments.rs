@@ -2,7 +2,8 @@
 //! period of tracking): it runs, writes its outputs, and its quality figures hold.
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
-use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
+use neurarm::experiments::paper::{compute, PaperRun};
+use neurarm::experiments::{Arms, GravityDesign, NoProgress, Settings};
 use neurarm_cosim::SystemSpec;
 use std::path::Path;
 
@@ -10,6 +11,13 @@ use neurarm_physics::config::ArmConfig;
 
 #[path = "support/quality.rs"]
 mod quality;
+
+/// A run of `neurarm paper` into `out`: the experiments, then their report.
+fn run_paper(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&str)) -> anyhow::Result<PaperRun> {
+    let run = compute(out, arms, settings, &NoProgress, log)?;
+    neurarm::report::write_report(out, &run).map_err(anyhow::Error::msg)?;
+    Ok(run)
+}
 
 #[test]
 fn the_quick_paper_run_reproduces_the_papers_findings() {

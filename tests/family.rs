@@ -19,9 +19,11 @@
 //! friction nets' error (2 % on the example arms).
 //! Needs the FMU binary: `cargo build --release -p neurarm-fmu` (scripts/test builds it).
 
+use std::path::Path;
 use std::sync::Mutex;
 
-use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
+use neurarm::experiments::paper::{compute, PaperRun};
+use neurarm::experiments::{Arms, GravityDesign, NoProgress, Settings};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::family::{random_arm, FAMILY_MAX_JOINTS, FAMILY_MIN_JOINTS};
 
@@ -64,13 +66,20 @@ fn the_quick_paper_run_holds_on_the_random_family_of_arms() {
     assert!(failures.is_empty(), "{} of {} family arms failed:\n{}", failures.len(), rows.len() + failures.len(), failures.join("\n"));
 }
 
+/// A run of `neurarm paper` into `out`: the experiments, then their report.
+fn run_paper(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&str)) -> anyhow::Result<PaperRun> {
+    let run = compute(out, arms, settings, &NoProgress, log)?;
+    neurarm::report::write_report(out, &run).map_err(anyhow::Error::msg)?;
+    Ok(run)
+}
+
 /// One family arm's quick run and checks; a row of its figures.
 fn run_one(seed: u64, joints: usize) -> String {
     let config = random_arm(seed, joints);
     let out = tempfile::tempdir().unwrap();
     let settings = Settings { gravity_design: Some(GravityDesign::Sampled { poses: 200 }), threads: 1, ..Settings::quick() };
     let arms = Arms::new(config.clone(), None, None).unwrap_or_else(|e| panic!("the arm is refused: {e}"));
-    let run = run_paper(out.path(), &arms, &settings, &mut |_| {}).unwrap_or_else(|e| panic!("the run fails: {e}"));
+    let run = run_paper(out.path(), &arms, &settings, &mut |_| {}).unwrap_or_else(|e| panic!("the run fails: {e:#}"));
     let r = &run.results;
     assert_eq!(r.setup.joints, joints);
     let real: ArmConfig = r.setup.real.clone();

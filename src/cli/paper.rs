@@ -1,12 +1,17 @@
 //! `neurarm paper`: the paper's experiments end to end (identification, training, Table 1,
 //! gravity compensation) through the master and the FMUs, into one output folder.
 
-use std::path::PathBuf;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use neurarm::experiments::paper::{compute, PaperRun, Table1};
+use neurarm::experiments::{Arms, GravityDesign, Progress, Settings};
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::control::ReferencePlacement;
+use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
 use neurarm_physics::nn::InputEncoding;
 
 use super::common::{load_config, parse_angle_encoding, PlatformArgs};
@@ -90,98 +95,97 @@ pub struct PaperArgs {
 }
 
 /// A number of `text` within `low..=high` [`unit`], or why not.
-fn number_within(text: &str, low: f64, high: f64, unit: &str) -> Result<f64, String> {
-    let v: f64 = text.parse().map_err(|e| format!("{text:?} is not a number: {e}"))?;
+fn number_within(text: &str, low: f64, high: f64, unit: &str) -> Result<f64> {
+    let v: f64 = text.parse().with_context(|| format!("{text:?} is not a number"))?;
     if !(low..=high).contains(&v) {
-        return Err(format!("{v} {unit} is outside {low} to {high} {unit}"));
+        bail!("{v} {unit} is outside {low} to {high} {unit}");
     }
     Ok(v)
 }
 
 /// A look-ahead horizon: 0 to 1 s.
-fn parse_horizon(text: &str) -> Result<f64, String> {
+fn parse_horizon(text: &str) -> Result<f64> {
     number_within(text, 0.0, 1.0, "s")
 }
 
 /// A friction top speed: 0.5 to 50 rad/s.
-fn parse_top_speed(text: &str) -> Result<f64, String> {
+fn parse_top_speed(text: &str) -> Result<f64> {
     number_within(text, 0.5, 50.0, "rad/s")
 }
 
 /// Runs `neurarm paper`.
 pub fn run(args: PaperArgs) -> Result<()> {
-    use neurarm::experiments::{paper::run_paper, Arms, GravityDesign, Settings};
-    let PaperArgs {
-        config,
-        real,
-        output,
-        quick,
-        threads,
-        seed,
-        centre,
-        scale,
-        tracking_gains,
-        joint_gains,
-        gravity_poses,
-        gravity_grid,
-        gravity_inputs,
-        gravity_study,
-        gravity_plain_average,
-        friction_max_speed,
-        intent_horizon,
-        platforms,
-        fmi3,
-    } = args;
-    let mut settings = if quick { Settings::quick() } else { Settings::paper() };
-    settings.platforms = platforms.checked()?;
-    settings.fmi3 = fmi3;
-    if let Some(s) = seed {
+    let settings = settings_of(&args)?;
+    let arms = arms_of(&args)?;
+    let output = &args.output;
+    let run = run_into(output, &arms, &settings).with_context(|| format!("no run was written to {}", output.display()))?;
+    say_table_1(&run.results.table_1);
+    eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
+    Ok(())
+}
+
+/// The settings `args` ask for: the paper's or the quick run's, with the options given.
+fn settings_of(args: &PaperArgs) -> Result<Settings> {
+    let mut settings = if args.quick { Settings::quick() } else { Settings::paper() };
+    settings.platforms = args.platforms.clone().checked()?;
+    settings.fmi3 = args.fmi3;
+    if let Some(s) = args.seed {
         settings.seed = s;
     }
-    if let Some(t) = threads {
+    if let Some(t) = args.threads {
         settings.threads = t.max(1);
     }
-    if let Some(g) = tracking_gains {
-        let (pair, null_damping) = match g.len() {
-            2 => (&g[..], None),
-            3 => (&g[..2], Some(g[2])),
-            n => bail!("--tracking-gains takes kp,kd or kp,kd,null_damping; got {n} numbers"),
-        };
-        let (kp, kd) = gain_pair("--tracking-gains", pair)?;
-        settings.tracking_gains.kp = kp;
-        settings.tracking_gains.kd = kd;
-        if let Some(null) = null_damping {
-            if !(null.is_finite() && null >= 0.0) {
-                bail!("--tracking-gains: the null-space damping must be >= 0 (got {null})");
-            }
-            settings.tracking_gains.null_damping = null;
-        }
+    if let Some(g) = &args.tracking_gains {
+        settings.tracking_gains = tracking_gains(g, settings.tracking_gains)?;
     }
-    if let Some(poses) = gravity_poses {
+    if let Some(poses) = args.gravity_poses {
         settings.gravity_design = Some(GravityDesign::Sampled { poses: poses as usize });
     }
-    if let Some(per_joint) = gravity_grid {
+    if let Some(per_joint) = args.gravity_grid {
         settings.gravity_design = Some(GravityDesign::Grid { per_joint: per_joint as usize });
     }
-    if let Some(encoding) = gravity_inputs {
+    if let Some(encoding) = args.gravity_inputs {
         settings.gravity_encoding = encoding;
     }
-    settings.gravity_friction_correction = !gravity_plain_average;
-    settings.intent_horizon = intent_horizon;
-    if let Some(v) = friction_max_speed {
+    settings.gravity_friction_correction = !args.gravity_plain_average;
+    settings.intent_horizon = args.intent_horizon;
+    if let Some(v) = args.friction_max_speed {
         settings.max_velocity = v;
     }
-    settings.gravity_study = gravity_study.map(|n| n as usize);
-    if let Some(g) = joint_gains {
-        (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", &g)?;
+    settings.gravity_study = args.gravity_study.map(|n| n as usize);
+    if let Some(g) = &args.joint_gains {
+        (settings.joint_kp, settings.joint_kd) = gain_pair("--joint-gains", g)?;
         settings.scale_joint_gains = false;
     }
-    let nominal = load_config(config.clone())?;
-    let real = match real {
-        Some(path) => Some((ArmConfig::from_toml_file(&path)?, path.display().to_string())),
+    Ok(settings)
+}
+
+/// `gains` with the values of `--tracking-gains`: kp,kd or kp,kd,null_damping.
+fn tracking_gains(values: &[f64], mut gains: TaskSpaceGains) -> Result<TaskSpaceGains> {
+    let (pair, null_damping) = match values.len() {
+        2 => (values, None),
+        3 => (&values[..2], Some(values[2])),
+        n => bail!("--tracking-gains takes kp,kd or kp,kd,null_damping; got {n} numbers"),
+    };
+    (gains.kp, gains.kd) = gain_pair("--tracking-gains", pair)?;
+    if let Some(null) = null_damping {
+        if !(null.is_finite() && null >= 0.0) {
+            bail!("--tracking-gains: the null-space damping must be >= 0 (got {null})");
+        }
+        gains.null_damping = null;
+    }
+    Ok(gains)
+}
+
+/// The arms `args` ask for: the arm (the built-in one without `--config`), the real arm if
+/// given, the reference placed as given.
+fn arms_of(args: &PaperArgs) -> Result<Arms> {
+    let nominal = load_config(args.config.clone())?;
+    let real = match &args.real {
+        Some(path) => Some((ArmConfig::from_toml_file(path)?, path.display().to_string())),
         None => None,
     };
-    let placement = match (centre, scale) {
+    let placement = match (&args.centre, args.scale) {
         (None, None) => None,
         (centre, scale) => {
             let mut p = ReferencePlacement::for_arm(&nominal.arm);
@@ -195,11 +199,72 @@ pub fn run(args: PaperArgs) -> Result<()> {
             Some(p)
         }
     };
-    let arm_name = config.map_or("the built-in arm".to_owned(), |c| c.display().to_string());
-    let arms = Arms::new(nominal, real, placement).map_err(|e| anyhow::anyhow!("{arm_name}: {e}"))?;
-    let run = run_paper(&output, &arms, &settings, &mut |line| eprintln!("[paper] {line}"))
-        .map_err(|e| anyhow::anyhow!("{e}\n(no run was written to {})", output.display()))?;
-    let t = &run.results.table_1;
+    let arm_name = args.config.as_ref().map_or("the built-in arm".to_owned(), |c| c.display().to_string());
+    Arms::new(nominal, real, placement).context(arm_name)
+}
+
+/// Runs the paper's experiments on `arms` with `settings` and writes their report into
+/// `out`. Everything is written into a staging folder beside `out` that replaces `out` only
+/// when the whole run has succeeded, so a failed run leaves no folder that looks finished (and
+/// an earlier run in `out` untouched). `out` must be absent, empty, or an earlier run's folder
+/// (it has a `results.json`); through a symbolic link, the folder it points to is replaced.
+fn run_into(out: &Path, arms: &Arms, settings: &Settings) -> Result<PaperRun> {
+    settings.design_for(arms.joints()).check(arms.joints())?;
+    let out = &run_folder(out)?;
+    let staging = staging_folder(out)?;
+    let run = compute(staging.path(), arms, settings, &StageBars::default(), &mut |line| eprintln!("[paper] {line}"))?;
+    neurarm::report::write_report(staging.path(), &run).map_err(anyhow::Error::msg)?;
+    let staged = staging.keep();
+    replace_folder(&staged, out).inspect_err(|_| {
+        let _ = std::fs::remove_dir_all(&staged);
+    })?;
+    Ok(run)
+}
+
+/// The folder a run goes to, `out` or, through symbolic links, the folder it points to;
+/// refused unless absent, empty or an earlier run's.
+fn run_folder(out: &Path) -> Result<PathBuf> {
+    if neurarm::output::is_stdout(out) {
+        bail!("the run is a folder (report, data, nets, FMUs, plots): give the folder's name, not '-'");
+    }
+    let out = neurarm::output::follow_links(out).with_context(|| out.display().to_string())?;
+    if out.exists() && !out.is_dir() {
+        bail!("{} is not a folder: give a folder for the run", out.display());
+    }
+    if out.exists() {
+        let empty = std::fs::read_dir(&out).with_context(|| out.display().to_string())?.next().is_none();
+        if !empty && !out.join("results.json").is_file() {
+            bail!("{} exists and is not the folder of an earlier run (no results.json): choose another output folder", out.display());
+        }
+    }
+    Ok(out)
+}
+
+/// A new, hidden staging folder beside `out` (removed when dropped).
+fn staging_folder(out: &Path) -> Result<tempfile::TempDir> {
+    let name = out.file_name().with_context(|| format!("{}: not a folder name", out.display()))?.to_string_lossy().into_owned();
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&parent).with_context(|| parent.display().to_string())?;
+    tempfile::Builder::new()
+        .prefix(&format!(".{name}.partial-"))
+        .tempdir_in(&parent)
+        .with_context(|| format!("cannot create a staging folder in {}", parent.display()))
+}
+
+/// Moves the finished run in `staged` to `out`, replacing an earlier run there.
+fn replace_folder(staged: &Path, out: &Path) -> Result<()> {
+    if out.exists() {
+        std::fs::remove_dir_all(out).with_context(|| format!("removing the earlier run in {}", out.display()))?;
+    }
+    std::fs::rename(staged, out).with_context(|| format!("moving the finished run to {}", out.display()))
+}
+
+/// Says Table 1's figures, what the real arm's sensors cost, and the diagnostic loops that
+/// failed.
+fn say_table_1(t: &Table1) {
     let (m, q) = (&t.mse_m2, &t.ratios);
     eprintln!(
         "Table 1 MSE [m²]: sim perfect {:.3e}, NN {:.3e}, none {:.3e}; real NN {:.3e}, none {:.3e}\nratios: sim NN/perfect {:.3}, none/perfect {:.1}; real NN/none {:.3}",
@@ -215,8 +280,40 @@ pub fn run(args: PaperArgs) -> Result<()> {
     for failure in &t.diagnostic_failures {
         eprintln!("warning: diagnostic loop {failure}");
     }
-    eprintln!("wrote {} and {}", output.join("report.md").display(), output.join("results.json").display());
-    Ok(())
+}
+
+/// The stages of the paper run as progress bars on standard error, when it is a terminal.
+#[derive(Default)]
+struct StageBars {
+    /// The bar of the stage under way.
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl StageBars {
+    fn bar(&self) -> std::sync::MutexGuard<'_, Option<ProgressBar>> {
+        self.bar.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
+
+impl Progress for StageBars {
+    fn start(&self, what: &str, steps: u64) {
+        let b = if std::io::stderr().is_terminal() { ProgressBar::new(steps) } else { ProgressBar::hidden() };
+        b.set_style(ProgressStyle::with_template("{prefix:>28} {bar:30} {pos}/{len} {elapsed}").expect("valid template"));
+        b.set_prefix(what.to_owned());
+        *self.bar() = Some(b);
+    }
+
+    fn advance(&self) {
+        if let Some(b) = self.bar().as_ref() {
+            b.inc(1);
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(b) = self.bar().take() {
+            b.finish_and_clear();
+        }
+    }
 }
 
 /// Two positive gains from an option's values.

@@ -3,13 +3,15 @@
 
 use std::path::Path;
 
+use anyhow::{bail, Context, Result};
 use nalgebra::DMatrix;
 
-use super::{identification_internal_step, joint_loop, lightest_inertias, master, Settings};
+use super::{identification_internal_step, joint_loop, lightest_inertias, real_handles, Settings};
 pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
 use neurarm_physics::arm::{coriolis_of_one_joint_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
+use neurarm_physics::control::holds::{friction_hold_accelerations_into, friction_hold_torques_into};
 use neurarm_physics::nn::encoding::LOG_SPEED_SCALE_RAD_S;
 use neurarm_physics::nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};
 
@@ -21,15 +23,13 @@ pub enum FrictionHold {
     /// the driven joint bend the held ones at speed, and the pairs with them.
     Pd,
     /// Computed torque from the nominal rigid-body model without gravity, τ_h = S u_h + c_h for
-    /// the held joints h: u_h = −K_d q̇_h − K_p q_h (K_p = 400 1/s², K_d = 40 1/s, critically
-    /// damped at 20 rad/s), c the Coriolis and centrifugal torques, and S = H_hh − H_hf H_fh / H_ff
-    /// the held joints' inertia while the driven joint f moves freely. Then S q̈_h = S u_h −
-    /// H_hf q̈_f: the held joints settle exactly once the driven one runs at constant speed, in
-    /// every pose, so the coupling no longer bends the measurement. (With H_hh in place of S,
-    /// i.e. assuming q̈_f = 0 in the control law, the loop's real gain was up to 50 × the
-    /// designed one and sensor noise made it diverge. At 40 rad/s the noise of the measured
-    /// angles and speeds made the held joints jitter, and their friction was measured as the
-    /// driven joint's: +0.2 N·m on the emulated 6-joint arm; at 20 rad/s, 0.04 N·m.)
+    /// the held joints h: u_h = −K_d q̇_h − K_p q_h (K_p = ω², K_d = 2ω, critically damped at
+    /// ω = [`FRICTION_HOLD_RAD_S`](neurarm_physics::control::holds::FRICTION_HOLD_RAD_S)), c the
+    /// Coriolis and centrifugal torques, and S = H_hh − H_hf H_fh / H_ff the held joints'
+    /// inertia while the driven joint f moves freely
+    /// ([`friction_hold_torques_into`]).
+    /// Then S q̈_h = S u_h − H_hf q̈_f: the held joints settle exactly once the driven one runs
+    /// at constant speed, in every pose, so the coupling no longer bends the measurement.
     Rigid,
 }
 
@@ -64,6 +64,12 @@ impl LevelRecord {
     /// The record as a level to judge.
     pub fn level(&self) -> Level<'_> {
         Level { time: &self.time, speed: &self.speed, torque: &self.torque, line: 0 }
+    }
+
+    /// The samples from time `from` [s] on.
+    fn since(&self, from: f64) -> LevelRecord {
+        let k = self.time.partition_point(|&t| t < from);
+        LevelRecord { time: self.time[k..].to_vec(), speed: self.speed[k..].to_vec(), torque: self.torque[k..].to_vec() }
     }
 
     fn clear(&mut self) {
@@ -147,7 +153,8 @@ const OVERSHOOT_SPACINGS: f64 = 3.0;
 /// the others held at 0 (see [`FrictionHold`]), raising the torque level by level until the
 /// steady speed passes `settings.max_velocity`. Each level lasts until the measured
 /// level's last window passes the steadiness test of [`FrictionOptions`] (at most 20 s). The step
-/// between levels aims at `velocity_spacing` from the local slope of the levels so far.
+/// between levels aims at `velocity_spacing` from the local slope of the levels so far. With
+/// the rigid hold, speed-held levels then fill the speeds the constant torques jumped over.
 pub fn friction_run(
     arm_fmu: &Path,
     controller: &Path,
@@ -155,216 +162,312 @@ pub fn friction_run(
     joint: usize,
     direction: f64,
     settings: &Settings,
-) -> Result<FrictionRun, String> {
-    let n = model.dof();
+) -> Result<FrictionRun> {
+    let mut rig = FrictionRig::new(arm_fmu, controller, model, joint, settings)?;
     let rigid = settings.friction_hold == FrictionHold::Rigid;
-    let mut gains = if rigid { vec![(0.0, 0.0); n] } else { hold_gains(model) };
-    gains[joint] = (0.0, 0.0);
-    // Friction is identified with the arm horizontal, whatever its configured base angle.
-    let parameters = [("internal_step", Value::Real(identification_internal_step(model))), ("base_angle", Value::Real(0.0))];
-    let mut s = joint_loop(arm_fmu, controller, &parameters, &gains, None)?;
-    s.set("ctl", "use_sequence", Value::Boolean(false)).map_err(master)?;
-    let mut sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[]).map_err(master)?;
-    let handles = |sim: &Simulation, f: &dyn Fn(usize) -> String| -> Result<Vec<Handle>, String> {
-        (0..n).map(|i| sim.real_handle(&f(i)).map_err(master)).collect()
-    };
-    let torque_inputs = handles(&sim, &|i| format!("ctl.tau_comp_{}", i + 1))?;
-    let state = [handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?, handles(&sim, &|i| format!("arm.qd_meas_{}", i + 1))?].concat();
-    let speed_index = n + joint;
-    // The rigid hold (see [`FrictionHold::Rigid`]).
-    let rigid_body = model.clone().with_base_angle(0.0).frictionless();
-    let mut data = ArmData::new(&rigid_body);
-    let (mut h, mut c, mut u, mut x, mut commanded) =
-        (nalgebra::DMatrix::zeros(n, n), vec![0.0; n], vec![0.0; n], vec![0.0; 2 * n], vec![0.0; n]);
-    const HOLD_RAD_S: f64 = 20.0;
-    // One step with the driven joint under `drive`; returns its measured speed after the step
-    // and the torque it got.
-    let mut step = |sim: &mut Simulation, drive: Drive| -> Result<(f64, f64), String> {
-        sim.get_reals(&state, &mut x).map_err(master)?;
-        if rigid {
-            let (q, qd) = x.split_at(n);
-            mass_matrix_into(&rigid_body, &mut data, q, &mut h);
-            // The held joints are at rest but for noise: their measured speeds would only put
-            // that noise into the Coriolis terms (× the driven joint's speed).
-            coriolis_of_one_joint_into(&rigid_body, &mut data, q, joint, qd[joint], &mut c);
-            for i in 0..n {
-                u[i] = -2.0 * HOLD_RAD_S * qd[i] - HOLD_RAD_S * HOLD_RAD_S * q[i];
-            }
-            match drive {
-                Drive::Torque(_) => {
-                    // τ_h = S u_h + c_h with S = H_hh − H_hf H_fh / H_ff, the held joints'
-                    // inertia while the driven joint f moves freely.
-                    u[joint] = 0.0;
-                    let coupling: f64 = (0..n).map(|k| h[(joint, k)] * u[k]).sum::<f64>() / h[(joint, joint)];
-                    for i in 0..n {
-                        commanded[i] = (0..n).map(|k| h[(i, k)] * u[k]).sum::<f64>() - h[(i, joint)] * coupling + c[i];
-                    }
-                }
-                Drive::Speed { wanted, feedforward, bandwidth } => {
-                    // Computed torque on every joint, the driven one tracking a speed.
-                    u[joint] = bandwidth * (wanted - qd[joint]);
-                    for i in 0..n {
-                        commanded[i] = (0..n).map(|k| h[(i, k)] * u[k]).sum::<f64>() + c[i];
-                    }
-                    commanded[joint] += feedforward;
-                }
-            }
-        } else {
-            commanded.fill(0.0);
-        }
-        if let Drive::Torque(tau) = drive {
-            commanded[joint] = tau;
-        }
-        let torque = commanded[joint];
-        sim.set_reals(&torque_inputs, &commanded).map_err(master)?;
-        sim.step().map_err(master)?;
-        sim.get_reals(&state, &mut x).map_err(master)?;
-        Ok((x[speed_index], torque))
-    };
-    let window = (0.1 / settings.step).round() as usize;
     // The driven joint's inertia with the others held rigidly: H_ff, which the held joints'
     // angles (all 0) fix and the driven joint's own angle does not change.
     let inertia = held_inertia(model, joint);
     let options = run_options(settings, rigid.then_some(inertia));
-    let keep_s = options.window_s + 2.0 * settings.step;
     let mut run = FrictionRun { joint, ..Default::default() };
-    // A joint that never reaches the top speed stops the run: at most twice the torque its
-    // motor must give to carry the stretched arm (at least 100 N·m), so heavy arms' joints
-    // are not cut off below their own friction.
-    let torque_cap = (2.0 * model.gravity_load_nm(joint)).max(100.0);
-    let mut tau = 0.0;
-    let mut increment: f64 = 0.02;
-    // (torque, mean speed) of the levels that moved the joint.
-    let mut moving_levels: Vec<(f64, f64)> = Vec::new();
+    let moving_levels = climb_torque_levels(&mut rig, model, direction, settings, &options, &mut run)?;
+    if rigid {
+        speed_held_levels(&mut rig, &moving_levels, direction, settings, &mut run)?;
+    }
+    run.simulated_s = rig.sim.time();
+    Ok(run)
+}
+
+/// One friction run's loop: the arm and the joint controller through the master, joint
+/// `joint` driven and the others held (see [`FrictionHold`]), with the buffers a step needs.
+struct FrictionRig {
+    sim: Simulation,
+    /// The controller's `tau_comp_i`: the torques the run commands.
+    torque_inputs: Vec<Handle>,
+    /// The measured angles, then speeds.
+    state: Vec<Handle>,
+    joint: usize,
+    rigid: bool,
+    /// The nominal arm horizontal and without friction: the rigid hold's model.
+    rigid_body: ArmParams,
+    data: ArmData,
+    /// Mass matrix [kg·m²], Coriolis torques [N·m], accelerations [rad/s²], measured state,
+    /// commanded torques [N·m].
+    h: DMatrix<f64>,
+    c: Vec<f64>,
+    u: Vec<f64>,
+    x: Vec<f64>,
+    commanded: Vec<f64>,
+}
+
+impl FrictionRig {
+    /// The loop of `joint`'s run: the PD hold of [`hold_gains`] on the other joints, or (rigid
+    /// hold) the controller's gains at 0 and the hold computed here.
+    fn new(arm_fmu: &Path, controller: &Path, model: &ArmParams, joint: usize, settings: &Settings) -> Result<Self> {
+        let n = model.dof();
+        let rigid = settings.friction_hold == FrictionHold::Rigid;
+        let mut gains = if rigid { vec![(0.0, 0.0); n] } else { hold_gains(model) };
+        gains[joint] = (0.0, 0.0);
+        // Friction is identified with the arm horizontal, whatever its configured base angle.
+        let parameters = [("internal_step", Value::Real(identification_internal_step(model))), ("base_angle", Value::Real(0.0))];
+        let mut s = joint_loop(arm_fmu, controller, &parameters, &gains, None)?;
+        s.set("ctl", "use_sequence", Value::Boolean(false))?;
+        let sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[])?;
+        let torque_inputs = real_handles(&sim, n, "ctl.tau_comp")?;
+        let state = [real_handles(&sim, n, "arm.q_meas")?, real_handles(&sim, n, "arm.qd_meas")?].concat();
+        let rigid_body = model.clone().with_base_angle(0.0).frictionless();
+        let data = ArmData::new(&rigid_body);
+        Ok(Self {
+            sim,
+            torque_inputs,
+            state,
+            joint,
+            rigid,
+            rigid_body,
+            data,
+            h: DMatrix::zeros(n, n),
+            c: vec![0.0; n],
+            u: vec![0.0; n],
+            x: vec![0.0; 2 * n],
+            commanded: vec![0.0; n],
+        })
+    }
+
+    /// One step with the driven joint under `drive`: its measured speed after the step
+    /// [rad/s] and the torque it got [N·m].
+    fn step(&mut self, drive: Drive) -> Result<(f64, f64)> {
+        let (n, joint) = (self.u.len(), self.joint);
+        self.sim.get_reals(&self.state, &mut self.x)?;
+        if self.rigid {
+            self.rigid_hold(drive);
+        } else {
+            self.commanded.fill(0.0);
+        }
+        if let Drive::Torque(tau) = drive {
+            self.commanded[joint] = tau;
+        }
+        let torque = self.commanded[joint];
+        self.sim.set_reals(&self.torque_inputs, &self.commanded)?;
+        self.sim.step()?;
+        self.sim.get_reals(&self.state, &mut self.x)?;
+        Ok((self.x[n + joint], torque))
+    }
+
+    /// The rigid hold's torques (see [`FrictionHold::Rigid`]) from the measured state, into
+    /// `commanded`: under a constant torque the held joints' hold, under a speed drive
+    /// computed torque on every joint, the driven one tracking its speed.
+    fn rigid_hold(&mut self, drive: Drive) {
+        let (n, joint) = (self.u.len(), self.joint);
+        let (q, qd) = self.x.split_at(n);
+        mass_matrix_into(&self.rigid_body, &mut self.data, q, &mut self.h);
+        // The held joints are at rest but for noise: their measured speeds would only put
+        // that noise into the Coriolis terms (× the driven joint's speed).
+        coriolis_of_one_joint_into(&self.rigid_body, &mut self.data, q, joint, qd[joint], &mut self.c);
+        friction_hold_accelerations_into(q, qd, &mut self.u);
+        match drive {
+            Drive::Torque(_) => friction_hold_torques_into(&self.h, &self.c, &mut self.u, joint, &mut self.commanded),
+            Drive::Speed { wanted, feedforward, bandwidth } => {
+                self.u[joint] = bandwidth * (wanted - qd[joint]);
+                for i in 0..n {
+                    self.commanded[i] = (0..n).map(|k| self.h[(i, k)] * self.u[k]).sum::<f64>() + self.c[i];
+                }
+                self.commanded[joint] += feedforward;
+            }
+        }
+    }
+}
+
+/// Plays the constant torque `tau` [N·m] on the driven joint, `window` steps at a time, until
+/// the last window of `record` (samples of the last `keep_s` seconds) passes the
+/// identification's steadiness test, or for 20 s: the test the levels are judged by
+/// afterwards. Returns the level's mean speed [rad/s].
+fn play_torque_level(
+    rig: &mut FrictionRig,
+    tau: f64,
+    window: usize,
+    keep_s: f64,
+    options: &FrictionOptions,
+    record: &mut LevelRecord,
+) -> Result<f64> {
+    let started = rig.sim.time();
+    record.clear();
+    let verdict = loop {
+        for _ in 0..window {
+            let (speed, torque) = rig.step(Drive::Torque(tau))?;
+            record.push(rig.sim.time(), speed, torque, keep_s);
+        }
+        let report = judge_level(&record.level(), options);
+        if matches!(report.verdict, Verdict::Kept | Verdict::AtRest) || rig.sim.time() - started > 20.0 {
+            break report;
+        }
+    };
+    Ok(verdict.speed_rad_s)
+}
+
+/// Where the constant-torque climb of a friction run stands.
+struct Climb {
+    /// The torque of the level [N·m].
+    tau: f64,
+    /// The step to the next level [N·m].
+    increment: f64,
+    /// (torque [N·m], mean speed [rad/s]) of the levels that moved the joint.
+    moving: Vec<(f64, f64)>,
+}
+
+impl Climb {
+    /// Takes the mean speed `mean` [rad/s] of the level just played: a level that moved the
+    /// joint sets the next step from the local slope. Returns whether the level overshot (then
+    /// the climb goes back to the first moving level and the level is not counted as moving).
+    fn after_level(&mut self, mean: f64, direction: f64, settings: &Settings) -> bool {
+        let moving = mean * direction > 2.0 * settings.bin_width.min(0.05);
+        if !moving {
+            return false;
+        }
+        let mut overshot = false;
+        if let Some(&(t0, v0)) = self.moving.last() {
+            let slope = (self.tau - t0) / (mean - v0);
+            if slope.is_finite() && slope > 0.0 {
+                // At most doubling: one level whose speed barely moved (noise, the Stribeck
+                // dip) would otherwise make the next step jump by a whole rad/s.
+                let adapted = (slope * settings.velocity_spacing).clamp(MIN_TORQUE_STEP_NM, (2.0 * self.increment).min(0.5));
+                // The step to the second moving level is made before any slope is known;
+                // far too large for a joint with little viscous friction, it jumps past
+                // speeds no level then covers: go back to the first moving level, once, and
+                // climb again with the step the slope asks for. (Later jumps, where friction
+                // falls with speed faster than the levels can follow, are the law's own: the
+                // speed-controlled levels below fill them.)
+                overshot = self.moving.len() == 1
+                    && (mean - v0).abs() > OVERSHOOT_SPACINGS * settings.velocity_spacing
+                    && adapted < 0.5 * self.increment;
+                self.increment = adapted;
+                if overshot {
+                    self.tau = t0;
+                }
+            }
+        }
+        if !overshot {
+            self.moving.push((self.tau, mean));
+        }
+        overshot
+    }
+}
+
+/// The constant-torque levels of a friction run: from 0.02 N·m up in `direction` until the
+/// steady speed passes `settings.max_velocity`, each level's last window kept in `run`.
+/// Returns (torque [N·m], mean speed [rad/s]) of the levels that moved the joint. A joint that
+/// never reaches the top speed stops the run: at most twice the torque its motor must give
+/// to carry the stretched arm (at least 100 N·m), so heavy arms' joints are not cut off below
+/// their own friction.
+fn climb_torque_levels(
+    rig: &mut FrictionRig,
+    model: &ArmParams,
+    direction: f64,
+    settings: &Settings,
+    options: &FrictionOptions,
+    run: &mut FrictionRun,
+) -> Result<Vec<(f64, f64)>> {
+    let window = (0.1 / settings.step).round() as usize;
+    let keep_s = options.window_s + 2.0 * settings.step;
+    let torque_cap = (2.0 * model.gravity_load_nm(rig.joint)).max(100.0);
+    let mut climb = Climb { tau: 0.0, increment: 0.02, moving: Vec::new() };
     let mut record = LevelRecord::default();
     loop {
-        tau += direction * increment;
-        let started = sim.time();
-        record.clear();
-        // A level lasts until its last window passes the identification's steadiness test
-        // (or 20 s): the test the levels are judged by afterwards.
-        let verdict = loop {
-            for _ in 0..window {
-                let (speed, torque) = step(&mut sim, Drive::Torque(tau))?;
-                record.push(sim.time(), speed, torque, keep_s);
-            }
-            let report = judge_level(&record.level(), &options);
-            if matches!(report.verdict, Verdict::Kept | Verdict::AtRest) || sim.time() - started > 20.0 {
-                break report;
-            }
-        };
-        let mean = verdict.speed_rad_s;
-        let moving = mean * direction > 2.0 * settings.bin_width.min(0.05);
-        let mut overshot = false;
-        if moving {
-            if let Some(&(t0, v0)) = moving_levels.last() {
-                let slope = (tau - t0) / (mean - v0);
-                if slope.is_finite() && slope > 0.0 {
-                    // At most doubling: one level whose speed barely moved (noise, the Stribeck
-                    // dip) would otherwise make the next step jump by a whole rad/s.
-                    let adapted = (slope * settings.velocity_spacing).clamp(MIN_TORQUE_STEP_NM, (2.0 * increment).min(0.5));
-                    // The step to the second moving level is made before any slope is known;
-                    // far too large for a joint with little viscous friction, it jumps past
-                    // speeds no level then covers: go back to the first moving level, once, and
-                    // climb again with the step the slope asks for. (Later jumps, where friction
-                    // falls with speed faster than the levels can follow, are the law's own: the
-                    // speed-controlled levels below fill them.)
-                    overshot = moving_levels.len() == 1
-                        && (mean - v0).abs() > OVERSHOOT_SPACINGS * settings.velocity_spacing
-                        && adapted < 0.5 * increment;
-                    increment = adapted;
-                    if overshot {
-                        tau = t0;
-                    }
-                }
-            }
-            if !overshot {
-                moving_levels.push((tau, mean));
-            }
-        }
+        climb.tau += direction * climb.increment;
+        let mean = play_torque_level(rig, climb.tau, window, keep_s, options, &mut record)?;
+        let overshot = climb.after_level(mean, direction, settings);
         // Every level is kept for the identification, the probes at rest below the first
         // moving level among them (they give the pair at rest).
-        let trimmed_from = record.time.partition_point(|&t| t < sim.time() - keep_s);
-        run.levels.push(LevelRecord {
-            time: record.time[trimmed_from..].to_vec(),
-            speed: record.speed[trimmed_from..].to_vec(),
-            torque: record.torque[trimmed_from..].to_vec(),
-        });
+        run.levels.push(record.since(rig.sim.time() - keep_s));
         if !overshot && mean * direction >= settings.max_velocity {
-            break;
+            return Ok(climb.moving);
         }
-        if tau.abs() > torque_cap {
-            return Err(format!(
+        if climb.tau.abs() > torque_cap {
+            bail!(
                 "joint {}: no speed of {} rad/s below {torque_cap:.0} N·m (the larger of 100 N·m and twice the joint's \
                  gravity load); lower the runs' top speed (`neurarm paper --friction-max-speed`) if the joint cannot reach it",
-                joint + 1,
+                rig.joint + 1,
                 settings.max_velocity
-            ));
+            );
         }
     }
-    // Below the first moving level's speed constant torques cannot hold the joint: where
-    // friction falls with speed (Stribeck) the steady state is unstable, so the first level
-    // that moves jumps to where friction rises again (0.3–0.7 rad/s on a Stribeck joint) and
-    // leaves a gap the net would bridge blindly. The rigid hold fills it with speed-controlled
-    // levels: computed torque on every joint from the rigid-body model, the driven joint's
-    // acceleration u_f = ω (q̇_d − q̇_f) plus the first moving level's torque τ_1 as feedforward,
-    // so its torque is τ_1 + H_ff u_f + (coupling), a P loop of gain ω H_ff on its speed; each
-    // level settles for 0.5 s and is then averaged over 1 s. A steady state of any P loop is a
-    // point of the friction curve, so the pair is the level's mean speed and mean torque. The
-    // loop holds a speed only where its gain beats the fall of friction with speed, so ω starts
-    // at 40 rad/s and is raised (160, 640) until the level stays within half a bin width of
-    // its target (so the mid-bin lowest levels keep bins of their own), or else the closest
-    // within half its target is kept (a light distal joint held none within the bin); a
-    // stiffer loop first would put its gain × the speed noise into the torque of every level.
-    // (With constant-torque holds instead of computed torque on all joints, the speed loop and
-    // the holds fought and diverged.)
-    if let (true, Some(&(tau_first, v_first))) = (rigid, moving_levels.first()) {
-        // Below the first moving level, then in every gap the constant torques jumped (where
-        // friction falls with speed faster than the levels can follow: a Stribeck dip past the
-        // first level, viscous friction falling with speed), each level fed forward the torque
-        // of the moving level below it.
-        let mut targets: Vec<(f64, f64)> =
-            speed_level_targets(v_first.abs(), settings.velocity_spacing, settings.bin_width).into_iter().map(|t| (t, tau_first)).collect();
-        let mut climbed: Vec<(f64, f64)> = moving_levels.iter().map(|&(tau, v)| (v.abs(), tau)).collect();
-        climbed.sort_by(|a, b| a.0.total_cmp(&b.0));
-        for (below, above) in climbed.iter().zip(climbed.iter().skip(1)) {
-            targets.extend(gap_level_targets(below.0, above.0, settings.velocity_spacing).into_iter().map(|t| (t, below.1)));
+}
+
+/// The speed-held levels of the rigid hold, kept in `run`.
+///
+/// Below the first moving level's speed constant torques cannot hold the joint: where
+/// friction falls with speed (Stribeck) the steady state is unstable, so the first level
+/// that moves jumps to where friction rises again (0.3–0.7 rad/s on a Stribeck joint) and
+/// leaves a gap the net would bridge blindly. The rigid hold fills it with speed-controlled
+/// levels: computed torque on every joint from the rigid-body model, the driven joint's
+/// acceleration u_f = ω (q̇_d − q̇_f) plus the first moving level's torque τ_1 as feedforward,
+/// so its torque is τ_1 + H_ff u_f + (coupling), a P loop of gain ω H_ff on its speed; each
+/// level settles for 0.5 s and is then averaged over 1 s. A steady state of any P loop is a
+/// point of the friction curve, so the pair is the level's mean speed and mean torque. The
+/// loop holds a speed only where its gain beats the fall of friction with speed, so ω starts
+/// at 40 rad/s and is raised (160, 640) until the level stays within half a bin width of
+/// its target (so the mid-bin lowest levels keep bins of their own), or else the closest
+/// within half its target is kept (a light distal joint held none within the bin); a
+/// stiffer loop first would put its gain × the speed noise into the torque of every level.
+/// (With constant-torque holds instead of computed torque on all joints, the speed loop and
+/// the holds fought and diverged.)
+fn speed_held_levels(
+    rig: &mut FrictionRig,
+    moving_levels: &[(f64, f64)],
+    direction: f64,
+    settings: &Settings,
+    run: &mut FrictionRun,
+) -> Result<()> {
+    let settle = (SPEED_LEVEL_SETTLE_S / settings.step).round() as usize;
+    let average = (SPEED_LEVEL_AVERAGE_S / settings.step).round() as usize;
+    let mut level = LevelRecord::default();
+    for (target, feedforward) in speed_level_plan(moving_levels, settings) {
+        let wanted = direction * target;
+        // The first level within half a bin of its target, else the closest within half
+        // its target: (how far off [rad/s], level).
+        let mut chosen: Option<(f64, LevelRecord)> = None;
+        for bandwidth in SPEED_LOOP_RAD_S {
+            level.clear();
+            for k in 0..settle + average {
+                let (speed, torque) = rig.step(Drive::Speed { wanted, feedforward, bandwidth })?;
+                if k >= settle {
+                    level.push(rig.sim.time(), speed, torque, f64::INFINITY);
+                }
+            }
+            let off = (level.speed.iter().sum::<f64>() / level.speed.len() as f64 - wanted).abs();
+            if off < 0.5 * target.min(settings.bin_width) {
+                chosen = Some((off, std::mem::take(&mut level)));
+                break;
+            }
+            if off < 0.5 * target && chosen.as_ref().is_none_or(|(best, _)| off < *best) {
+                chosen = Some((off, level.clone()));
+            }
         }
-        let settle = (SPEED_LEVEL_SETTLE_S / settings.step).round() as usize;
-        let average = (SPEED_LEVEL_AVERAGE_S / settings.step).round() as usize;
-        let mut level = LevelRecord::default();
-        for (target, feedforward) in targets {
-            let wanted = direction * target;
-            // The first level within half a bin of its target, else the closest within half
-            // its target: (how far off [rad/s], level).
-            let mut chosen: Option<(f64, LevelRecord)> = None;
-            for bandwidth in SPEED_LOOP_RAD_S {
-                level.clear();
-                for k in 0..settle + average {
-                    let (speed, torque) = step(&mut sim, Drive::Speed { wanted, feedforward, bandwidth })?;
-                    if k >= settle {
-                        level.push(sim.time(), speed, torque, f64::INFINITY);
-                    }
-                }
-                let off = (level.speed.iter().sum::<f64>() / level.speed.len() as f64 - wanted).abs();
-                if off < 0.5 * target.min(settings.bin_width) {
-                    chosen = Some((off, std::mem::take(&mut level)));
-                    break;
-                }
-                if off < 0.5 * target && chosen.as_ref().is_none_or(|(best, _)| off < *best) {
-                    chosen = Some((off, level.clone()));
-                }
-            }
-            // Judged like every level: the mean torque of a P loop's steady state, less H_ff
-            // times the fitted acceleration.
-            if let Some((_, kept)) = chosen {
-                run.levels.push(kept);
-                run.speed_levels += 1;
-            }
+        // Judged like every level: the mean torque of a P loop's steady state, less H_ff
+        // times the fitted acceleration.
+        if let Some((_, kept)) = chosen {
+            run.levels.push(kept);
+            run.speed_levels += 1;
         }
     }
-    run.simulated_s = sim.time();
-    Ok(run)
+    Ok(())
+}
+
+/// The (speed [rad/s, magnitude], feedforward torque [N·m]) of the speed-held levels after
+/// the climb's `moving_levels` (torque, speed): below the first moving level, then in every
+/// gap the constant torques jumped (where friction falls with speed faster than the levels
+/// can follow: a Stribeck dip past the first level, viscous friction falling with speed),
+/// each level fed forward the torque of the moving level below it. None without a moving
+/// level.
+fn speed_level_plan(moving_levels: &[(f64, f64)], settings: &Settings) -> Vec<(f64, f64)> {
+    let Some(&(tau_first, v_first)) = moving_levels.first() else { return Vec::new() };
+    let mut targets: Vec<(f64, f64)> =
+        speed_level_targets(v_first.abs(), settings.velocity_spacing, settings.bin_width).into_iter().map(|t| (t, tau_first)).collect();
+    let mut climbed: Vec<(f64, f64)> = moving_levels.iter().map(|&(tau, v)| (v.abs(), tau)).collect();
+    climbed.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (below, above) in climbed.iter().zip(climbed.iter().skip(1)) {
+        targets.extend(gap_level_targets(below.0, above.0, settings.velocity_spacing).into_iter().map(|t| (t, below.1)));
+    }
+    targets
 }
 
 /// The speeds [rad/s, magnitudes] of the rigid hold's speed-controlled levels below the first
@@ -438,7 +541,7 @@ pub fn friction_step_width(speed_noise_rad_s: f64) -> f64 {
 /// the speed on a log scale ([`InputEncoding::LogSpeed`]), on which the step is an ordinary
 /// slope. Otherwise (noisy speeds) the net is the paper's, on the raw speed and the pairs
 /// alone.
-pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_s: f64, seed: u64) -> Result<WeightsFile, String> {
+pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_s: f64, seed: u64) -> Result<WeightsFile> {
     let width = friction_step_width(speed_noise_rad_s);
     let lowest = |direction: f64| pairs.iter().filter(|p| p.0 * direction > 0.0).map(|p| p.0.abs()).fold(f64::INFINITY, f64::min);
     // Both directions need room for the step's points below their lowest pair.
@@ -476,7 +579,7 @@ pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_
                 settings.seed += 1000;
             }
         }
-        let trained = train(&x, &t, &settings, &mut |_| {}).map_err(|e| format!("friction net of joint {}: {e}", joint + 1))?;
+        let trained = train(&x, &t, &settings, &mut |_| {}).with_context(|| format!("friction net of joint {}", joint + 1))?;
         let net = EncodedNet { encoding, mlp: trained.net.clone() };
         let at_pairs = (pairs.iter().map(|p| (net.evaluate(&[p.0])[0] - p.1).powi(2)).sum::<f64>() / pairs.len() as f64).sqrt();
         let score = at_pairs + interpolant_rms(&net, pairs);
@@ -564,8 +667,8 @@ impl FrictionNetError {
 
 /// The error of `net` (velocity → torque) against the friction law `law` (see
 /// [`FrictionNetError`]).
-pub fn friction_net_error(net: &WeightsFile, law: &JointFriction, min_speed: f64, max_speed: f64) -> Result<FrictionNetError, String> {
-    let mlp = net.network()?;
+pub fn friction_net_error(net: &WeightsFile, law: &JointFriction, min_speed: f64, max_speed: f64) -> Result<FrictionNetError> {
+    let mlp = net.network().map_err(anyhow::Error::msg)?;
     let steps = ((max_speed - min_speed) / 1e-3).round() as usize;
     let (mut sq, mut worst, mut largest, mut count) = (0.0, 0.0f64, 0.0f64, 0usize);
     for k in 0..=steps {

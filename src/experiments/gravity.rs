@@ -5,14 +5,16 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
+use anyhow::{bail, Context, Result};
 use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};
 
 use super::friction::FrictionCurve;
-use super::{identification_internal_step, joint_loop, master, parallel, GravityDesign, Settings};
-use crate::identify::{gravity_pair, GravityCorrection, GravityOptions, PassFault, PassWindow};
+use super::{identification_internal_step, joint_loop, parallel, real_handles, GravityDesign, Settings};
+use crate::identify::{gravity_pair, GravityCorrection, GravityMeasurement, GravityOptions, PassFault, PassWindow};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
-use neurarm_physics::arm::{gravity_torques, inverse_dynamics_rnea_into, ArmData, ArmParams};
+use neurarm_physics::arm::{gravity_torques, ArmData, ArmParams};
+use neurarm_physics::control::holds::gravity_hold_torques_into;
 use neurarm_physics::nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 
 /// One averaged measurement: the mean of the up and down passes' angles [rad] and torques [N·m].
@@ -50,7 +52,7 @@ pub fn sampled_poses(poses: usize, joints: usize, seed: u64) -> Vec<Vec<f64>> {
 }
 
 /// [`sampled_poses`] with each pose's place in the draw: the poses drawn first N of a larger
-/// design are themselves a uniform design of N poses (what [`gravity_study`] uses).
+/// design are themselves a uniform design of N poses (what [`gravity_study`](super::gravity_study::gravity_study) uses).
 pub fn sampled_poses_drawn(poses: usize, joints: usize, seed: u64) -> Vec<(usize, Vec<f64>)> {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut left: Vec<(usize, Vec<f64>)> = (0..poses).map(|i| (i, (0..joints).map(|_| rng.gen::<f64>() * 2.0 * PI).collect())).collect();
@@ -107,15 +109,13 @@ pub fn measure_gravity(
     correction: Option<&[FrictionCurve]>,
     settings: &Settings,
     done: &(dyn Fn() + Sync),
-) -> Result<GravitySweep, String> {
+) -> Result<GravitySweep> {
     let chunk = poses.len().div_ceil(settings.threads.max(1)).max(1);
     let chunks: Vec<Vec<Vec<f64>>> = poses.chunks(chunk).map(|c| c.to_vec()).collect();
     let swept = parallel(
         chunks,
         settings.threads,
-        |points| {
-            gravity_sweep(arm_fmu, controller, model, &points, correction, settings).map_err(|e| format!("gravity identification: {e}"))
-        },
+        |points| gravity_sweep(arm_fmu, controller, model, &points, correction, settings).context("gravity identification"),
         done,
     )?;
     let mut all = GravitySweep::default();
@@ -168,7 +168,10 @@ pub const STEADY_RETRIES: u32 = 2;
 
 /// Bandwidth of the gravity sweep's hold [rad/s]: the inertia-scaled PD that keeps the joints
 /// on their moves is critically damped at it.
-pub const GRAVITY_HOLD_RAD_S: f64 = 80.0;
+pub use neurarm_physics::control::holds::GRAVITY_HOLD_RAD_S;
+
+/// Length of a pass at its first attempt [s].
+const PASS_S: f64 = 0.4;
 
 /// Moves the arm (base turned 90°) through `points` in order: a smooth rest-to-rest move to
 /// just below each point, then every joint slowly up through it and back down at
@@ -192,12 +195,13 @@ pub const GRAVITY_HOLD_RAD_S: f64 = 80.0;
 /// Without `correction` both pair sets are the plain average.
 ///
 /// The joints are held on the moves by an inertia-scaled PD, τ = Ĥ(q)(q̈_d + K_d ė + K_p e) +
-/// Ĉ(q, q̇)q̇ with K_p = ω², K_d = 2ω (critically damped at ω = [`GRAVITY_HOLD_RAD_S`] in every pose),
-/// computed here from the nominal rigid-body `model` *without gravity* (that is what is being
-/// identified) and passed to the joint controller's `tau_comp` input, its own gains at 0. A
-/// diagonal PD cannot do this: tuned for the lightest pose it is underdamped in the heavy ones
-/// and its oscillation put errors of up to 7 N·m into the pairs. The speed is 0.25 rad/s:
-/// Coriolis and centrifugal torques grow with its square and do not cancel between passes.
+/// Ĉ(q, q̇)q̇ with K_p = ω², K_d = 2ω (critically damped at ω = [`GRAVITY_HOLD_RAD_S`] in every
+/// pose; [`gravity_hold_torques_into`]), computed here from the nominal rigid-body `model`
+/// *without gravity* (that is what is being identified) and passed to the joint controller's
+/// `tau_comp` input, its own gains at 0. A diagonal PD cannot do this: tuned for the lightest
+/// pose it is underdamped in the heavy ones and its oscillation put errors of up to 7 N·m into
+/// the pairs. The speed is 0.25 rad/s: Coriolis and centrifugal torques grow with its square
+/// and do not cancel between passes.
 pub fn gravity_sweep(
     arm_fmu: &Path,
     controller: &Path,
@@ -205,127 +209,35 @@ pub fn gravity_sweep(
     points: &[Vec<f64>],
     correction: Option<&[FrictionCurve]>,
     settings: &Settings,
-) -> Result<GravitySweep, String> {
-    const PASS_S: f64 = 0.4;
-    const HOLD_RAD_S: f64 = GRAVITY_HOLD_RAD_S;
+) -> Result<GravitySweep> {
     let n = model.dof();
     if let Some(curves) = correction.filter(|c| !c.is_empty() && c.len() != n) {
-        return Err(format!("friction curves of {} joints for {n} joints", curves.len()));
+        bail!("friction curves of {} joints for {n} joints", curves.len());
     }
-    // Gravity-free nominal model of the hold: the horizontal arm's inverse dynamics.
-    let rigid_body = model.clone().with_base_angle(0.0).frictionless();
     let offset = SWEEP_SPEED * PASS_S / 2.0;
     let first: Vec<f64> = points[0].iter().map(|q| q - offset).collect();
-    let mut parameters: Vec<(String, Value)> =
-        vec![("base_angle".into(), Value::Real(PI / 2.0)), ("internal_step".into(), Value::Real(identification_internal_step(model)))];
-    for (i, q) in first.iter().enumerate() {
-        parameters.push((format!("q0_{}", i + 1), Value::Real(*q)));
-    }
-    let p: Vec<(&str, Value)> = parameters.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
-    let mut s = joint_loop(arm_fmu, controller, &p, &vec![(0.0, 0.0); n], None)?;
-    s.set("ctl", "use_sequence", Value::Boolean(false)).map_err(master)?;
-    let mut sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[]).map_err(master)?;
-    let handles = |sim: &Simulation, f: &dyn Fn(usize) -> String| -> Result<Vec<Handle>, String> {
-        (0..n).map(|i| sim.real_handle(&f(i)).map_err(master)).collect()
-    };
-    let reference: Vec<Handle> =
-        [handles(&sim, &|i| format!("ctl.q_ref_{}", i + 1))?, handles(&sim, &|i| format!("ctl.qd_ref_{}", i + 1))?].concat();
-    let measured: Vec<Handle> = [
-        handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?,
-        handles(&sim, &|i| format!("ctl.tau_{}", i + 1))?,
-        handles(&sim, &|i| format!("arm.qd_meas_{}", i + 1))?,
-    ]
-    .concat();
-    let state: Vec<Handle> =
-        [handles(&sim, &|i| format!("arm.q_meas_{}", i + 1))?, handles(&sim, &|i| format!("arm.qd_meas_{}", i + 1))?].concat();
-    let hold_torque = handles(&sim, &|i| format!("ctl.tau_comp_{}", i + 1))?;
-    let mut x = vec![0.0; 2 * n];
-    let mut u = vec![0.0; n];
-    let (mut rigid_data, mut tau) = (ArmData::new(&rigid_body), vec![0.0; n]);
-    // One step with the reference (angles, velocities) in `r` and acceleration `a`.
-    let mut step = |sim: &mut Simulation, r: &[f64], a: &[f64]| -> Result<(), String> {
-        sim.set_reals(&reference, r).map_err(master)?;
-        sim.get_reals(&state, &mut x).map_err(master)?;
-        for i in 0..n {
-            u[i] = a[i] + 2.0 * HOLD_RAD_S * (r[n + i] - x[n + i]) + HOLD_RAD_S * HOLD_RAD_S * (r[i] - x[i]);
-        }
-        inverse_dynamics_rnea_into(&rigid_body, &mut rigid_data, &x[..n], &x[n..], &u, &mut tau);
-        sim.set_reals(&hold_torque, &tau).map_err(master)?;
-        sim.step().map_err(master)
-    };
-    let mut accel = vec![0.0; n];
-    let no_accel = vec![0.0; n];
-    let h = settings.step;
-    let half_window = (0.02 / h).round() as usize;
-    let mut set_ref = vec![0.0; 2 * n];
-    let mut read = vec![0.0; 3 * n];
+    let mut rig = SweepRig::new(arm_fmu, controller, model, &first, settings)?;
+    let half_window = (0.02 / settings.step).round() as usize;
     // The pass pairs are judged and averaged by the code `neurarm identify gravity` runs on logs.
     let options = GravityOptions {
         speed_rad_s: SWEEP_SPEED,
         share: STEADY_SHARE,
-        window_s: 2.0 * half_window as f64 * h,
+        window_s: 2.0 * half_window as f64 * settings.step,
         // Noise-free 1 kHz samples: a short average still sees a joint that sticks.
         smoothing_s: 0.01,
         ..GravityOptions::default()
     };
+    // Gravity-free nominal model of the hold: the horizontal arm's inverse dynamics.
+    let rigid_body = model.clone().with_base_angle(0.0).frictionless();
     let correction_terms = match correction {
         Some(curves) => GravityCorrection { friction: curves, model: Some(&rigid_body) },
         None => GravityCorrection::default(),
     };
-    let mut current = first.clone();
+    let mut current = first;
     let mut sweep = GravitySweep::default();
     for (index, point) in points.iter().enumerate() {
-        let mut measured_pair = None;
-        for attempt in 0..=STEADY_RETRIES {
-            let pass_s = PASS_S * (1 << attempt) as f64;
-            let (offset, pass_steps) = (SWEEP_SPEED * pass_s / 2.0, (pass_s / h).round() as usize);
-            // Rest-to-rest cosine move to the start of the up pass.
-            let start: Vec<f64> = point.iter().map(|q| q - offset).collect();
-            let distance = current.iter().zip(&start).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-            if distance > 0.0 {
-                let duration = (distance / 1.5).max(0.3);
-                let steps = (duration / h).ceil() as usize;
-                for k in 1..=steps {
-                    let s = k as f64 / steps as f64;
-                    let blend = 0.5 - 0.5 * (PI * s).cos();
-                    let rate = 0.5 * PI * (PI * s).sin() / duration;
-                    let rate_change = 0.5 * PI * PI * (PI * s).cos() / (duration * duration);
-                    for i in 0..n {
-                        set_ref[i] = current[i] + (start[i] - current[i]) * blend;
-                        set_ref[n + i] = (start[i] - current[i]) * rate;
-                        accel[i] = (start[i] - current[i]) * rate_change;
-                    }
-                    step(&mut sim, &set_ref, &accel)?;
-                }
-            }
-            let mut passes = Vec::with_capacity(2);
-            for direction in [1.0, -1.0] {
-                let from: Vec<f64> = point.iter().map(|q| q - direction * offset).collect();
-                let mut window = PassWindow::new(n);
-                for k in 1..=pass_steps {
-                    for i in 0..n {
-                        set_ref[i] = from[i] + direction * SWEEP_SPEED * k as f64 * h;
-                        set_ref[n + i] = direction * SWEEP_SPEED;
-                    }
-                    step(&mut sim, &set_ref, &no_accel)?;
-                    if k.abs_diff(pass_steps / 2) <= half_window {
-                        sim.get_reals(&measured, &mut read).map_err(master)?;
-                        window.push(sim.time(), &read[..n], &read[2 * n..], &read[n..2 * n]);
-                    }
-                }
-                passes.push(window);
-            }
-            current = point.iter().map(|q| q - offset).collect();
-            match gravity_pair(&passes[0], &passes[1], &options, &correction_terms) {
-                Ok(m) => {
-                    measured_pair = Some(m);
-                    break;
-                }
-                Err(PassFault::UnsteadyUp | PassFault::UnsteadyDown) => sweep.repeated += 1,
-                Err(fault) => return Err(format!("pose {}: {}", index + 1, fault.reason())),
-            }
-        }
-        match measured_pair {
+        let pose = PoseMeasure { point, half_window, options: &options, correction: &correction_terms };
+        match pose.measure(&mut rig, &mut current, &mut sweep.repeated).with_context(|| format!("pose {}", index + 1))? {
             Some(m) => {
                 sweep.pairs.push((m.q.clone(), m.torque));
                 sweep.pairs_uncorrected.push((m.q, m.torque_uncorrected));
@@ -334,8 +246,162 @@ pub fn gravity_sweep(
             None => sweep.dropped.push(point.iter().map(|q| q.rem_euclid(2.0 * PI)).collect()),
         }
     }
-    sweep.time_s = sim.time();
+    sweep.time_s = rig.sim.time();
     Ok(sweep)
+}
+
+/// The gravity sweep's loop: the arm (base turned 90°) and the joint controller through the
+/// master, the controller's gains at 0 and the hold's torque fed to its `tau_comp` input.
+struct SweepRig {
+    sim: Simulation,
+    /// The controller's reference angles, then speeds.
+    reference: Vec<Handle>,
+    /// Measured angles, commanded torques, measured speeds: what a pass records.
+    measured: Vec<Handle>,
+    /// Measured angles, then speeds: what the hold reads.
+    state: Vec<Handle>,
+    /// The controller's `tau_comp_i`.
+    hold_torque: Vec<Handle>,
+    /// The gravity-free nominal model of the hold.
+    rigid_body: ArmParams,
+    data: ArmData,
+    /// Measured state, hold accelerations [rad/s²], hold torques [N·m].
+    x: Vec<f64>,
+    u: Vec<f64>,
+    tau: Vec<f64>,
+    /// Communication step [s].
+    h: f64,
+}
+
+impl SweepRig {
+    /// The loop for `model`'s arm in `arm_fmu`, starting at the angles `first` [rad].
+    fn new(arm_fmu: &Path, controller: &Path, model: &ArmParams, first: &[f64], settings: &Settings) -> Result<Self> {
+        let n = model.dof();
+        let mut parameters: Vec<(String, Value)> =
+            vec![("base_angle".into(), Value::Real(PI / 2.0)), ("internal_step".into(), Value::Real(identification_internal_step(model)))];
+        for (i, q) in first.iter().enumerate() {
+            parameters.push((format!("q0_{}", i + 1), Value::Real(*q)));
+        }
+        let p: Vec<(&str, Value)> = parameters.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
+        let mut s = joint_loop(arm_fmu, controller, &p, &vec![(0.0, 0.0); n], None)?;
+        s.set("ctl", "use_sequence", Value::Boolean(false))?;
+        let sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[])?;
+        let reference = [real_handles(&sim, n, "ctl.q_ref")?, real_handles(&sim, n, "ctl.qd_ref")?].concat();
+        let measured =
+            [real_handles(&sim, n, "arm.q_meas")?, real_handles(&sim, n, "ctl.tau")?, real_handles(&sim, n, "arm.qd_meas")?].concat();
+        let state = [real_handles(&sim, n, "arm.q_meas")?, real_handles(&sim, n, "arm.qd_meas")?].concat();
+        let hold_torque = real_handles(&sim, n, "ctl.tau_comp")?;
+        let rigid_body = model.clone().with_base_angle(0.0).frictionless();
+        let data = ArmData::new(&rigid_body);
+        Ok(Self {
+            sim,
+            reference,
+            measured,
+            state,
+            hold_torque,
+            rigid_body,
+            data,
+            x: vec![0.0; 2 * n],
+            u: vec![0.0; n],
+            tau: vec![0.0; n],
+            h: settings.step,
+        })
+    }
+
+    /// One step with the reference (angles [rad], velocities [rad/s]) in `r` and acceleration
+    /// `a` [rad/s²].
+    fn step(&mut self, r: &[f64], a: &[f64]) -> Result<()> {
+        self.sim.set_reals(&self.reference, r)?;
+        self.sim.get_reals(&self.state, &mut self.x)?;
+        gravity_hold_torques_into(&self.rigid_body, &mut self.data, r, a, &self.x, &mut self.u, &mut self.tau);
+        self.sim.set_reals(&self.hold_torque, &self.tau)?;
+        self.sim.step()?;
+        Ok(())
+    }
+
+    /// Rest-to-rest cosine move from the angles `from` to `to` [rad]: at 1.5 rad/s of the
+    /// farthest joint on average, at least 0.3 s.
+    fn move_between(&mut self, from: &[f64], to: &[f64]) -> Result<()> {
+        let n = from.len();
+        let h = self.h;
+        let distance = from.iter().zip(to).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        if !(distance > 0.0) {
+            return Ok(());
+        }
+        let (mut set_ref, mut accel) = (vec![0.0; 2 * n], vec![0.0; n]);
+        let duration = (distance / 1.5).max(0.3);
+        let steps = (duration / h).ceil() as usize;
+        for k in 1..=steps {
+            let s = k as f64 / steps as f64;
+            let blend = 0.5 - 0.5 * (PI * s).cos();
+            let rate = 0.5 * PI * (PI * s).sin() / duration;
+            let rate_change = 0.5 * PI * PI * (PI * s).cos() / (duration * duration);
+            for i in 0..n {
+                set_ref[i] = from[i] + (to[i] - from[i]) * blend;
+                set_ref[n + i] = (to[i] - from[i]) * rate;
+                accel[i] = (to[i] - from[i]) * rate_change;
+            }
+            self.step(&set_ref, &accel)?;
+        }
+        Ok(())
+    }
+
+    /// One pass of `pass_steps` steps at `SWEEP_SPEED` in `direction` (±1) through `point`
+    /// [rad], starting `offset` [rad] before it; records the steps within `half_window` of the
+    /// middle.
+    fn pass(&mut self, point: &[f64], direction: f64, offset: f64, pass_steps: usize, half_window: usize) -> Result<PassWindow> {
+        let n = point.len();
+        let h = self.h;
+        let (mut set_ref, no_accel, mut read) = (vec![0.0; 2 * n], vec![0.0; n], vec![0.0; 3 * n]);
+        let from: Vec<f64> = point.iter().map(|q| q - direction * offset).collect();
+        let mut window = PassWindow::new(n);
+        for k in 1..=pass_steps {
+            for i in 0..n {
+                set_ref[i] = from[i] + direction * SWEEP_SPEED * k as f64 * h;
+                set_ref[n + i] = direction * SWEEP_SPEED;
+            }
+            self.step(&set_ref, &no_accel)?;
+            if k.abs_diff(pass_steps / 2) <= half_window {
+                self.sim.get_reals(&self.measured, &mut read)?;
+                window.push(self.sim.time(), &read[..n], &read[2 * n..], &read[n..2 * n]);
+            }
+        }
+        Ok(window)
+    }
+}
+
+/// The measurement of one pose of the sweep: its angles [rad], the measuring window's half
+/// length [steps], and how the passes are judged and corrected.
+struct PoseMeasure<'a> {
+    point: &'a [f64],
+    half_window: usize,
+    options: &'a GravityOptions,
+    correction: &'a GravityCorrection<'a>,
+}
+
+impl PoseMeasure<'_> {
+    /// Moves from the angles `current` to below the pose, passes up and down through it and
+    /// averages the passes; an unsteady pass pair is measured again with passes twice as long
+    /// (counted in `repeated`), at most [`STEADY_RETRIES`] times. `current` ends where the
+    /// last pass started. Returns the pair, or none if the passes stayed unsteady.
+    fn measure(&self, rig: &mut SweepRig, current: &mut Vec<f64>, repeated: &mut usize) -> Result<Option<GravityMeasurement>> {
+        for attempt in 0..=STEADY_RETRIES {
+            let pass_s = PASS_S * (1 << attempt) as f64;
+            let (offset, pass_steps) = (SWEEP_SPEED * pass_s / 2.0, (pass_s / rig.h).round() as usize);
+            // Rest-to-rest cosine move to the start of the up pass.
+            let start: Vec<f64> = self.point.iter().map(|q| q - offset).collect();
+            rig.move_between(current, &start)?;
+            let up = rig.pass(self.point, 1.0, offset, pass_steps, self.half_window)?;
+            let down = rig.pass(self.point, -1.0, offset, pass_steps, self.half_window)?;
+            *current = start;
+            match gravity_pair(&up, &down, self.options, self.correction) {
+                Ok(m) => return Ok(Some(m)),
+                Err(PassFault::UnsteadyUp | PassFault::UnsteadyDown) => *repeated += 1,
+                Err(fault) => bail!("{}", fault.reason()),
+            }
+        }
+        Ok(None)
+    }
 }
 
 /// Trains the gravity net (angles → torques) on the averaged pairs, its inputs encoded by
@@ -345,7 +411,7 @@ pub fn train_gravity_net(
     encoding: InputEncoding,
     settings: &Settings,
     on_epoch: &mut dyn FnMut(&EpochInfo<'_>),
-) -> Result<WeightsFile, String> {
+) -> Result<WeightsFile> {
     let n = pairs[0].0.len();
     let x = encoding.encode_all(&DMatrix::from_fn(n, pairs.len(), |r, c| pairs[c].0[r]));
     let t = DMatrix::from_fn(n, pairs.len(), |r, c| pairs[c].1[r]);
@@ -357,7 +423,7 @@ pub fn train_gravity_net(
         seed: settings.seed + 1,
         ..TrainSettings::default()
     };
-    let trained = train(&x, &t, &train_settings, on_epoch).map_err(|e| format!("gravity net: {e}"))?;
+    let trained = train(&x, &t, &train_settings, on_epoch).context("gravity net")?;
     let signals = |prefix: &str, unit: &str| (0..n).map(|i| Signal { name: format!("{prefix}_{}", i + 1), unit: unit.into() }).collect();
     Ok(WeightsFile::new(&trained.net, signals("q", "rad"), signals("tau_gravity", "N.m"), train_settings, trained.report)
         .with_encoding(encoding)
@@ -424,10 +490,10 @@ pub struct GravityNetErrors {
 /// The gravity net against the true gravity of `arm` (base turned 90°) on
 /// `settings.gravity_test_points` random poses (not training poses) over the whole turn and,
 /// for a raw net, as many within the trained span [0, `span`)ⁿ [rad].
-pub fn gravity_net_errors(gravity_net: &WeightsFile, arm: &ArmParams, span: f64, settings: &Settings) -> Result<GravityNetErrors, String> {
+pub fn gravity_net_errors(gravity_net: &WeightsFile, arm: &ArmParams, span: f64, settings: &Settings) -> Result<GravityNetErrors> {
     let vertical = arm.clone().with_base_angle(PI / 2.0);
     let n = arm.dof();
-    let net = gravity_net.network()?;
+    let net = gravity_net.network().map_err(anyhow::Error::msg)?;
     let periodic = net.encoding.is_periodic();
     let low = &gravity_net.input_scaling.min;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(settings.seed + 99);

@@ -5,6 +5,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use anyhow::Result;
 use serde::Serialize;
 
 use super::friction::FrictionCurve;
@@ -72,7 +73,7 @@ pub fn gravity_study(
     correction: Option<&[FrictionCurve]>,
     largest: usize,
     settings: &Settings,
-) -> Result<GravityStudy, String> {
+) -> Result<GravityStudy> {
     let n = model.dof();
     let started = Instant::now();
     let mut designs: Vec<(GravityDesign, Vec<super::GravityPair>)> = Vec::new();

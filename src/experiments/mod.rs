@@ -1,8 +1,10 @@
 //! The paper's experiments for any planar arm of 2 to 8 joints, run through the master with
 //! the FMUs in closed loop, one module per concern: [`friction`] identification, [`gravity`]
 //! identification, [`tracking`] (Table 1) and the [`joint_space`] gravity-compensation loop,
-//! with the arms and sizes of a run in [`settings`]; [`paper`] runs them all. Experiments compute and return results; `crate::report` writes
-//! them. Every run is seeded, so results repeat exactly.
+//! with the arms and sizes of a run in [`settings`]; [`paper`] runs them all, in stages, into
+//! the figures of [`results`]. Experiments compute and return results; writing them up is the
+//! caller's, and so is showing progress (through [`Progress`]). Every run is seeded, so
+//! results repeat exactly.
 
 pub mod adaptation;
 pub mod friction;
@@ -10,6 +12,8 @@ pub mod gravity;
 pub mod gravity_study;
 pub mod joint_space;
 pub mod paper;
+pub mod progress;
+pub mod results;
 pub mod settings;
 pub mod tracking;
 
@@ -19,13 +23,16 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+use anyhow::{bail, Context, Result};
+
 use crate::export::export_fmu_for;
-use neurarm_cosim::{Algorithm, ConnectionSpec, FmuEntry, MasterError, SimulationSpec, System, SystemSpec, Value};
+use neurarm_cosim::{
+    Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, RunEnd, Simulation, SimulationSpec, System, SystemSpec, Value,
+};
 use neurarm_models::{
     FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
 };
 use neurarm_physics::arm::{gravity_torques, mass_matrix, ArmParams, ArmState};
-use neurarm_physics::config::ArmConfig;
 
 pub use friction::{
     friction_run, friction_step_width, held_inertia, pairs_of_runs, run_options, train_friction_net, FrictionHold, FrictionPair,
@@ -37,6 +44,7 @@ pub use gravity::{
 };
 pub use joint_space::{gravity_compensation_system, joint_rms_errors, joint_settled_errors};
 pub use paper::LOW_SPEED_RANGE_RAD_S;
+pub use progress::{NoProgress, Progress};
 pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_GRAVITY_POSES, MAX_JOINTS, MIN_JOINTS};
 pub use tracking::{tracking_errors, tracking_mse, tracking_start, tracking_system, TrackingErrors, TRACKING_SEED_POSE};
 
@@ -155,14 +163,13 @@ pub struct Fmus {
 }
 
 /// Exports the base FMUs of `arms` into `dir`.
-pub fn build_fmus(dir: &Path, arms: &Arms, settings: &Settings) -> Result<Fmus, String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+pub fn build_fmus(dir: &Path, arms: &Arms, settings: &Settings) -> Result<Fmus> {
+    std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     let nominal = &arms.nominal;
     let n = arms.joints();
-    let export = |id: &str, model: ModelSpec| -> Result<PathBuf, String> {
+    let export = |id: &str, model: ModelSpec| -> Result<PathBuf> {
         let path = dir.join(format!("{id}.fmu"));
-        export_fmu_for(&FmuSpec { identifier: id.into(), model }, &[], &path, settings.platforms.as_deref())
-            .map_err(|e| format!("{e:#}"))?;
+        export_fmu_for(&FmuSpec { identifier: id.into(), model }, &[], &path, settings.platforms.as_deref())?;
         Ok(path)
     };
     let ArmState { q: q_start, .. } = tracking_start(&nominal.arm, &arms.placement)?;
@@ -216,7 +223,7 @@ pub fn export_nn_compensator(
     friction: &[(String, PathBuf)],
     gravity: Option<&Path>,
     platforms: Option<&[String]>,
-) -> Result<PathBuf, String> {
+) -> Result<PathBuf> {
     let mut sources = friction.to_vec();
     if let Some(g) = gravity {
         sources.push(("gravity.json".into(), g.to_path_buf()));
@@ -226,12 +233,8 @@ pub fn export_nn_compensator(
         friction.iter().map(|(n, _)| n.clone()).collect(),
         gravity.map(|_| "gravity.json".to_owned()),
     ));
-    export_fmu_for(&FmuSpec { identifier: identifier.into(), model }, &sources, path, platforms).map_err(|e| format!("{e:#}"))?;
+    export_fmu_for(&FmuSpec { identifier: identifier.into(), model }, &sources, path, platforms)?;
     Ok(path.to_path_buf())
-}
-
-pub(crate) fn master(e: MasterError) -> String {
-    e.to_string()
 }
 
 /// Runs `tasks` on `threads` workers; results come back in task order. `done` is called
@@ -239,12 +242,12 @@ pub(crate) fn master(e: MasterError) -> String {
 pub fn parallel<T: Send, R: Send>(
     tasks: Vec<T>,
     threads: usize,
-    work: impl Fn(T) -> Result<R, String> + Sync,
+    work: impl Fn(T) -> Result<R> + Sync,
     done: impl Fn() + Sync,
-) -> Result<Vec<R>, String> {
+) -> Result<Vec<R>> {
     let n = tasks.len();
     let queue: Mutex<Vec<(usize, T)>> = Mutex::new(tasks.into_iter().enumerate().rev().collect());
-    let results: Mutex<Vec<Option<Result<R, String>>>> = Mutex::new((0..n).map(|_| None).collect());
+    let results: Mutex<Vec<Option<Result<R>>>> = Mutex::new((0..n).map(|_| None).collect());
     let next = AtomicUsize::new(0);
     std::thread::scope(|s| {
         for _ in 0..threads.max(1).min(n.max(1)) {
@@ -267,7 +270,7 @@ pub fn parallel<T: Send, R: Send>(
         match r {
             Some(Ok(v)) => out.push(v),
             Some(Err(e)) => return Err(e),
-            None => return Err("a task did not run because an earlier one failed".into()),
+            None => bail!("a task did not run because an earlier one failed"),
         }
     }
     Ok(out)
@@ -281,26 +284,31 @@ pub(crate) fn joint_loop(
     arm_parameters: &[(&str, Value)],
     kp_kd: &[(f64, f64)],
     compensator: Option<&Path>,
-) -> Result<System, String> {
+) -> Result<System, MasterError> {
     let mut s = System::new();
-    s.add_fmu("arm", arm_fmu).map_err(master)?.add_fmu("ctl", controller).map_err(master)?;
+    s.add_fmu("arm", arm_fmu)?.add_fmu("ctl", controller)?;
     for (name, v) in arm_parameters {
-        s.set("arm", name, v.clone()).map_err(master)?;
+        s.set("arm", name, v.clone())?;
     }
     for (i, (kp, kd)) in kp_kd.iter().enumerate() {
-        s.set("ctl", &format!("kp_{}", i + 1), Value::Real(*kp)).map_err(master)?;
-        s.set("ctl", &format!("kd_{}", i + 1), Value::Real(*kd)).map_err(master)?;
+        s.set("ctl", &format!("kp_{}", i + 1), Value::Real(*kp))?;
+        s.set("ctl", &format!("kd_{}", i + 1), Value::Real(*kd))?;
     }
-    s.connect("arm.q_meas_*", "ctl.q_*").map_err(master)?;
-    s.connect("arm.qd_meas_*", "ctl.qd_*").map_err(master)?;
-    s.connect("ctl.tau_*", "arm.tau_*").map_err(master)?;
+    s.connect("arm.q_meas_*", "ctl.q_*")?;
+    s.connect("arm.qd_meas_*", "ctl.qd_*")?;
+    s.connect("ctl.tau_*", "arm.tau_*")?;
     if let Some(c) = compensator {
-        s.add_fmu("comp", c).map_err(master)?;
-        s.connect("arm.q_meas_*", "comp.q_*").map_err(master)?;
-        s.connect("arm.qd_meas_*", "comp.qd_*").map_err(master)?;
-        s.connect("comp.tau_comp_*", "ctl.tau_comp_*").map_err(master)?;
+        s.add_fmu("comp", c)?;
+        s.connect("arm.q_meas_*", "comp.q_*")?;
+        s.connect("arm.qd_meas_*", "comp.qd_*")?;
+        s.connect("comp.tau_comp_*", "ctl.tau_comp_*")?;
     }
     Ok(s)
+}
+
+/// The handles of the Real variables `<prefix>_1` … `<prefix>_n` ("unit.variable") of `sim`.
+pub(crate) fn real_handles(sim: &Simulation, n: usize, prefix: &str) -> Result<Vec<Handle>, MasterError> {
+    (0..n).map(|i| sim.real_handle(&format!("{prefix}_{}", i + 1))).collect()
 }
 
 /// A recorded closed-loop run.
@@ -389,27 +397,71 @@ pub(crate) fn closed_loop(
     }
 }
 
+/// Why a closed loop failed: the master's error, if any, is the source.
+#[derive(Debug, thiserror::Error)]
+pub enum LoopError {
+    /// The system could not be built, started or given its events.
+    #[error(transparent)]
+    Setup(Box<MasterError>),
+    /// The arm's state blew up (see [`LoopRun::instability`]).
+    #[error("the loop went unstable at t = {time:.3} s: {column} = {value:.3e} (limit ±{UNSTABLE_SPEED_RAD_S} rad/s); lower its gains")]
+    Unstable {
+        /// When [s].
+        time: f64,
+        /// The recorded column.
+        column: String,
+        /// Its value [rad or rad/s].
+        value: f64,
+    },
+    /// A unit failed during the run.
+    #[error("the loop failed after t = {time:.3} s")]
+    Failed {
+        /// What the master said: the unit, the variable and the time.
+        source: Box<MasterError>,
+        /// The last recorded time [s] (the start if none was).
+        time: f64,
+    },
+    /// The run stopped before its end without an error.
+    #[error("the loop ended early: {0:?}")]
+    EndedEarly(RunEnd),
+}
+
+impl From<MasterError> for LoopError {
+    fn from(e: MasterError) -> Self {
+        LoopError::Setup(Box::new(e))
+    }
+}
+
+impl LoopError {
+    /// The line a run records for a loop it carries on without (results.json, report.md):
+    /// a failed unit's error followed by the time the loop had reached, else the error itself.
+    pub fn recorded(&self) -> String {
+        match self {
+            LoopError::Failed { source, time } => format!("{source} (at t = {time:.3} s)"),
+            other => other.to_string(),
+        }
+    }
+}
+
 /// Runs a closed-loop system (FMU paths relative to `base`), recording every step. A loop
 /// whose arm state blows up (see [`LoopRun::instability`]) or whose units fail is an error
 /// that says when and where.
-pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
-    let s = System::from_spec(spec, base).map_err(master)?;
+pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, LoopError> {
+    let s = System::from_spec(spec, base)?;
     let sim = &spec.simulation;
-    let mut run = s.initialize(sim.start, sim.step, sim.algorithm, &sim.record).map_err(master)?;
+    let mut run = s.initialize(sim.start, sim.step, sim.algorithm, &sim.record)?;
     run.record_every(sim.record_every);
     // The paper's loops never expect a unit to stop early: a discarded step is a failure.
     run.on_discard(neurarm_cosim::OnDiscard::Error);
-    run.schedule(&spec.event).map_err(master)?;
+    run.schedule(&spec.event)?;
     let outcome = run.run_until(sim.stop);
     let recorded = LoopRun { columns: run.columns(), rows: run.take_rows() };
-    if let Some((t, column, value)) = recorded.instability() {
-        return Err(format!(
-            "the loop went unstable at t = {t:.3} s: {column} = {value:.3e} (limit ±{UNSTABLE_SPEED_RAD_S} rad/s); lower its gains"
-        ));
+    if let Some((time, column, value)) = recorded.instability() {
+        return Err(LoopError::Unstable { time, column, value });
     }
-    let end = outcome.map_err(|e| format!("{} (at t = {:.3} s)", master(e), recorded.rows.last().map_or(sim.start, |r| r[0])))?;
-    if end != neurarm_cosim::RunEnd::Completed {
-        return Err(format!("the loop ended early: {end:?}"));
+    let end = outcome.map_err(|e| LoopError::Failed { source: Box::new(e), time: recorded.rows.last().map_or(sim.start, |r| r[0]) })?;
+    if end != RunEnd::Completed {
+        return Err(LoopError::EndedEarly(end));
     }
     Ok(recorded)
 }
@@ -417,6 +469,7 @@ pub fn run_loop(spec: &SystemSpec, base: &Path) -> Result<LoopRun, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use neurarm_physics::config::ArmConfig;
     use neurarm_physics::control::ReferencePlacement;
 
     #[test]
@@ -437,7 +490,7 @@ mod tests {
         assert_eq!(Settings::quick().design_for(6), GravityDesign::Sampled { poses: 81 });
         let given = Settings { gravity_design: Some(GravityDesign::Grid { per_joint: 3 }), ..Settings::paper() };
         assert_eq!(given.design_for(6), GravityDesign::Grid { per_joint: 3 });
-        assert!(GravityDesign::Grid { per_joint: 7 }.check(6).unwrap_err().contains("117649 poses"));
+        assert!(GravityDesign::Grid { per_joint: 7 }.check(6).unwrap_err().to_string().contains("117649 poses"));
         assert!(GravityDesign::Grid { per_joint: 1 }.check(3).is_err());
         assert!(GravityDesign::Sampled { poses: 9 }.check(3).is_err());
         assert!(GravityDesign::Sampled { poses: 3000 }.check(6).is_ok());
@@ -505,21 +558,21 @@ mod tests {
         let mut one = ArmConfig::default();
         one.arm.links.truncate(1);
         one.arm.friction.truncate(1);
-        let e = Arms::new(one, None, None).unwrap_err();
+        let e = format!("{:#}", Arms::new(one, None, None).unwrap_err());
         assert!(e.contains("1 joint;") && e.contains("2 to 8"), "{e}");
         let mut nine = ArmConfig::default();
         for _ in 0..5 {
             nine.arm.links.push(nine.arm.links[3].clone());
             nine.arm.friction.push(nine.arm.friction[3]);
         }
-        assert!(Arms::new(nine, None, None).unwrap_err().contains("9 joints"));
+        assert!(Arms::new(nine, None, None).unwrap_err().to_string().contains("9 joints"));
         let mut three = ArmConfig::default();
         three.arm.links.truncate(3);
         three.arm.friction.truncate(3);
-        let e = Arms::new(ArmConfig::default(), Some((three, "real3.toml".into())), None).unwrap_err();
+        let e = format!("{:#}", Arms::new(ArmConfig::default(), Some((three, "real3.toml".into())), None).unwrap_err());
         assert!(e.contains("real3.toml") && e.contains("3 joints") && e.contains("has 4"), "{e}");
         let far = ReferencePlacement { scale: 3.0, ..ReferencePlacement::for_arm(&ArmParams::default_four_link()) };
-        let e = Arms::new(ArmConfig::default(), None, Some(far)).unwrap_err();
+        let e = format!("{:#}", Arms::new(ArmConfig::default(), None, Some(far)).unwrap_err());
         assert!(e.contains("reach"), "{e}");
     }
 }

@@ -3,6 +3,7 @@
 
 use std::f64::consts::PI;
 
+use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::{tracking_start, FrictionHold};
@@ -62,7 +63,7 @@ pub struct Settings {
     /// Hidden neurons of the gravity net (the paper: 25).
     pub gravity_hidden: usize,
     /// Position gain of the joint-space gravity-compensation loop [N·m/rad] for the built-in
-    /// arm; scaled for other arms when `scale_joint_gains` (see [`joint_loop_gains`]).
+    /// arm; scaled for other arms when `scale_joint_gains` (see [`joint_loop_gains`](super::joint_loop_gains)).
     pub joint_kp: f64,
     /// Velocity gain of that loop [N·m·s/rad] (0 in the paper's law), scaled likewise.
     pub joint_kd: f64,
@@ -199,18 +200,18 @@ impl GravityDesign {
 
     /// Refuses a design of fewer than 2 points per joint or 10 poses, or more than
     /// [`MAX_GRAVITY_POSES`] poses, naming the option to change.
-    pub fn check(&self, joints: usize) -> Result<(), String> {
+    pub fn check(&self, joints: usize) -> Result<()> {
         match *self {
             GravityDesign::Grid { per_joint } if per_joint < 2 => {
-                Err(format!("a gravity grid of {per_joint} point per joint: use at least 2 (--gravity-grid)"))
+                bail!("a gravity grid of {per_joint} point per joint: use at least 2 (--gravity-grid)")
             }
-            GravityDesign::Grid { per_joint } if self.poses(joints) > MAX_GRAVITY_POSES => Err(format!(
+            GravityDesign::Grid { per_joint } if self.poses(joints) > MAX_GRAVITY_POSES => bail!(
                 "a {per_joint}ⁿ gravity grid is {} poses for {joints} joints, more than {MAX_GRAVITY_POSES}: take a coarser grid \
                  (--gravity-grid) or sampled poses (--gravity-poses)",
                 self.poses(joints)
-            )),
+            ),
             GravityDesign::Sampled { poses } if !(10..=MAX_GRAVITY_POSES).contains(&poses) => {
-                Err(format!("{poses} gravity poses: use 10 to {MAX_GRAVITY_POSES} (--gravity-poses)"))
+                bail!("{poses} gravity poses: use 10 to {MAX_GRAVITY_POSES} (--gravity-poses)")
             }
             _ => Ok(()),
         }
@@ -255,23 +256,20 @@ impl Arms {
     /// placement by the reach ([`ReferencePlacement::for_arm`]). Refuses, naming the cause,
     /// an arm of fewer than 2 or more than 8 joints, a real arm of another joint count, and
     /// a reference the nominal arm cannot reach from a start pose.
-    pub fn new(nominal: ArmConfig, real: Option<(ArmConfig, String)>, placement: Option<ReferencePlacement>) -> Result<Self, String> {
-        nominal.validate().map_err(|e| format!("the arm: {e}"))?;
+    pub fn new(nominal: ArmConfig, real: Option<(ArmConfig, String)>, placement: Option<ReferencePlacement>) -> Result<Self> {
+        nominal.validate().context("the arm")?;
         let n = nominal.arm.dof();
         if !(MIN_JOINTS..=MAX_JOINTS).contains(&n) {
-            return Err(format!(
+            bail!(
                 "the arm has {n} joint{}; the experiments take {MIN_JOINTS} to {MAX_JOINTS} (the task-space loop needs two to place the end effector in the plane; the gravity grid and the hold gains grow as kⁿ)",
                 if n == 1 { "" } else { "s" }
-            ));
+            );
         }
         let (real, real_origin) = match real {
             Some((real, source)) => {
-                real.validate().map_err(|e| format!("the real arm ({source}): {e}"))?;
+                real.validate().with_context(|| format!("the real arm ({source})"))?;
                 if real.arm.dof() != n {
-                    return Err(format!(
-                        "the real arm ({source}) has {} joints, the arm has {n}: give one of the same joint count",
-                        real.arm.dof()
-                    ));
+                    bail!("the real arm ({source}) has {} joints, the arm has {n}: give one of the same joint count", real.arm.dof());
                 }
                 (real, RealOrigin::Given { source })
             }

@@ -4,6 +4,8 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use anyhow::{anyhow, Result};
+
 use neurarm_cosim::{SystemSpec, Value};
 use neurarm_physics::arm::{jacobian, ArmParams, ArmState};
 use neurarm_physics::control::{inverse_kinematics, pseudo_inverse, scaled_reference, ReferencePlacement};
@@ -18,13 +20,13 @@ pub const TRACKING_SEED_POSE: [f64; 4] = [-0.4, 0.9, 0.7, 0.5];
 /// with its velocity, so no start-up transient enters the error. The pose comes from inverse
 /// kinematics seeded with [`TRACKING_SEED_POSE`]. Fails, saying why, when the arm cannot hold
 /// the curve or the inverse kinematics finds no pose.
-pub fn tracking_start(arm: &ArmParams, placement: &ReferencePlacement) -> Result<ArmState, String> {
-    placement.check(arm).map_err(|e| e.to_string())?;
+pub fn tracking_start(arm: &ArmParams, placement: &ReferencePlacement) -> Result<ArmState> {
+    placement.check(arm)?;
     let (x0, xd0, _) = scaled_reference(0.0, placement.centre, placement.scale);
     let seed: Vec<f64> = (0..arm.dof()).map(|i| TRACKING_SEED_POSE[i % 4]).collect();
     let q0 = inverse_kinematics(arm, x0, &seed)
-        .ok_or_else(|| format!("no joint angles put the end effector at the reference's start ({:.3}, {:.3}) m", x0.x, x0.y))?;
-    let pinv = pseudo_inverse(&jacobian(arm, &q0)).ok_or("singular start pose")?;
+        .ok_or_else(|| anyhow!("no joint angles put the end effector at the reference's start ({:.3}, {:.3}) m", x0.x, x0.y))?;
+    let pinv = pseudo_inverse(&jacobian(arm, &q0)).ok_or_else(|| anyhow!("singular start pose"))?;
     let qd0: Vec<f64> = (&pinv * nalgebra::DVector::from_column_slice(xd0.as_slice())).iter().copied().collect();
     Ok(ArmState { q: q0, qd: qd0 })
 }

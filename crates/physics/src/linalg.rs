@@ -103,6 +103,7 @@ pub struct SharedSlice<'a> {
 // SAFETY: a SharedSlice is only a &mut [f64] whose parts are handed out by `part`, whose
 // callers promise that no two live parts overlap.
 unsafe impl Send for SharedSlice<'_> {}
+// SAFETY: as for Send: shared references only hand out parts that callers keep disjoint.
 unsafe impl Sync for SharedSlice<'_> {}
 
 impl<'a> SharedSlice<'a> {

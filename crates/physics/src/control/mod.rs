@@ -6,6 +6,8 @@
 //! allocates nothing. [`task_space_acceleration`] and [`computed_torque`] are conveniences
 //! over the same code for one call.
 
+pub mod holds;
+
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 
 use crate::arm::{inverse_dynamics_rnea_into, jacobian, jacobian_dot_qd, jacobian_into, ArmData, ArmParams};

@@ -11,14 +11,18 @@ thread_local! {
     static COUNT: Cell<usize> = const { Cell::new(0) };
 }
 
+// SAFETY: every call is passed on unchanged to the system allocator, which upholds the
+// GlobalAlloc contract; counting touches only a thread-local integer and allocates nothing.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if WATCHING.with(Cell::get) {
             COUNT.with(|c| c.set(c.get() + 1));
         }
+        // SAFETY: the caller upholds GlobalAlloc's contract for these arguments; they are passed on as given.
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: the caller upholds GlobalAlloc's contract for these arguments; they are passed on as given.
         unsafe { System.dealloc(ptr, layout) }
     }
 }
