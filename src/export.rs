@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, ensure, Context, Result};
-use neurarm_fmi_export::package::{select_binaries, PLATFORM};
+use neurarm_fmi_export::package::{select_binaries, SelectError, PLATFORM};
 use neurarm_models::{FmuSpec, SPEC_FILE};
 
 /// File name of the FMU binary that `cargo build --release` makes.
@@ -55,16 +55,11 @@ pub fn cross_dir() -> Option<PathBuf> {
 /// one not built and how to build it.
 pub fn fmu_binaries(platforms: Option<&[String]>) -> Result<Vec<(String, PathBuf)>> {
     let host = if platforms.is_none_or(|w| w.iter().any(|p| p == PLATFORM.0)) { Some(find_binary()?) } else { None };
-    let found = select_binaries(host, cross_dir().as_deref(), "neurarm_fmu", platforms).map_err(|e| {
-        // The selection says what is missing in words; how to build it is added here.
-        let e = e.to_string();
-        if e.starts_with("unknown platform") {
-            anyhow!(e)
-        } else {
-            anyhow!(
-                "{e}; build them with scripts/build-platforms, or point NEURARM_FMU_PLATFORMS at a folder of <platform>/<library> builds"
-            )
-        }
+    let found = select_binaries(host, cross_dir().as_deref(), "neurarm_fmu", platforms).map_err(|e| match e {
+        SelectError::UnknownPlatform { .. } => anyhow::Error::new(e),
+        // How to build what is missing is added here.
+        _ => anyhow::Error::new(e)
+            .context("an FMU binary is missing (build it with scripts/build-platforms, or point NEURARM_FMU_PLATFORMS at a folder of <platform>/<library> builds)"),
     })?;
     same_sources(&found)?;
     Ok(found)

@@ -278,7 +278,7 @@ fn friction_net_from_log(
     written.files.extend(report);
     say(&format!("training the friction net of joint {joint} on {} pairs", found.pairs.len()));
     // `train_friction_net` (the experiments') says what failed in words.
-    let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed).map_err(anyhow::Error::msg)?;
+    let net = train_friction_net(joint - 1, &found.pairs, found.speed_noise_rad_s(), job.seed)?;
     written.net(&job.work, &format!("friction_{joint}.json"), &net)?;
     Ok(found.pairs)
 }
@@ -312,7 +312,7 @@ fn gravity_net_from_log(
     say(&format!("training the gravity net ({hidden} hidden neurons) on {} pairs", pairs.len()));
     let settings = Settings { seed: job.seed, gravity_hidden: hidden, ..Settings::paper() };
     // `train_gravity_net` (the experiments') says what failed in words.
-    let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch).map_err(anyhow::Error::msg)?;
+    let net = train_gravity_net(&pairs, InputEncoding::LinkAngles, &settings, on_epoch)?;
     written.net(&job.work, "gravity.json", &net)?;
     Ok(pairs.len())
 }

@@ -61,7 +61,7 @@ pub fn run_system_file(system: &Path, output: &Path, on_discard: Option<OnDiscar
     let text = neurarm_physics::text_file::read_text(system, neurarm_physics::text_file::MAX_CONFIG_BYTES)
         .with_context(|| format!("reading {}", system.display()))?;
     // `SystemSpec::from_toml` says what is wrong, and where, in words.
-    let mut spec = SystemSpec::from_toml(&text, &system.display().to_string()).map_err(anyhow::Error::msg)?;
+    let mut spec = SystemSpec::from_toml(&text, &system.display().to_string())?;
     if let Some(policy) = on_discard {
         spec.simulation.on_discard = policy;
     }

@@ -257,9 +257,7 @@ fn nn_compensator(
     let gravity_file = gravity.as_ref().map(|g| WeightsFile::read(g)).transpose()?;
     let names: Vec<String> = friction.iter().chain(&gravity).map(|p| p.display().to_string()).collect();
     let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(&friction_files).collect();
-    // `check_compensator_nets` says what is wrong in words, naming the files.
-    let joints = neurarm_models::check_compensator_nets(&named, names.get(friction.len()).map(String::as_str).zip(gravity_file.as_ref()))
-        .map_err(anyhow::Error::msg)?;
+    let joints = neurarm_models::check_compensator_nets(&named, names.get(friction.len()).map(String::as_str).zip(gravity_file.as_ref()))?;
     for (name, file) in names.iter().zip(friction_files.iter().chain(&gravity_file)) {
         if file.kind == NetKind::Unspecified {
             eprintln!("notice: {name} records no kind (trained before weights version 3, or with --kind unspecified): checked by its shape and names only");
@@ -305,7 +303,7 @@ fn task_space_controller(
         placement.scale = s;
     }
     // `tracking_start` (the experiments') says what is wrong in words.
-    let start = neurarm::experiments::tracking_start(&arm, &placement).map_err(anyhow::Error::msg)?;
+    let start = neurarm::experiments::tracking_start(&arm, &placement)?;
     let model = ModelSpec::TaskSpaceController(TaskSpaceControllerSpec {
         model: arm.frictionless(),
         gains,

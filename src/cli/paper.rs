@@ -213,7 +213,7 @@ fn run_into(out: &Path, arms: &Arms, settings: &Settings) -> Result<PaperRun> {
     let out = &run_folder(out)?;
     let staging = staging_folder(out)?;
     let run = compute(staging.path(), arms, settings, &StageBars::default(), &mut |line| eprintln!("[paper] {line}"))?;
-    neurarm::report::write_report(staging.path(), &run).map_err(anyhow::Error::msg)?;
+    neurarm::report::write_report(staging.path(), &run)?;
     let staged = staging.keep();
     replace_folder(&staged, out).inspect_err(|_| {
         let _ = std::fs::remove_dir_all(&staged);

@@ -105,6 +105,40 @@ pub enum BinaryError {
     NoFmi3Folder(String),
 }
 
+/// Why the binaries to pack could not be selected ([`select_binaries`]).
+#[derive(Debug, thiserror::Error)]
+pub enum SelectError {
+    /// No library was built for the host platform.
+    #[error("no {name} library built for {platform}")]
+    NoHostLibrary {
+        /// The library crate's name.
+        name: String,
+        /// The host's platform folder.
+        platform: &'static str,
+    },
+    /// An empty list of platforms.
+    #[error("no platform asked for")]
+    NoPlatformAsked,
+    /// A platform folder this crate does not know.
+    #[error("unknown platform {platform:?} (known: {known})")]
+    UnknownPlatform {
+        /// The folder asked for.
+        platform: String,
+        /// The folders known, listed.
+        known: String,
+    },
+    /// Platforms asked for with no library built.
+    #[error("no {name} library built for {} ({})", missing.join(", "), looked_in.as_ref().map_or("no folder of cross builds".to_owned(), |d| format!("looked in {}", d.display())))]
+    NotBuilt {
+        /// The library crate's name.
+        name: String,
+        /// The platforms without a library.
+        missing: Vec<String>,
+        /// The folder of cross builds searched, if any.
+        looked_in: Option<PathBuf>,
+    },
+}
+
 /// The architectures of a macOS library, thin or universal: `"x86_64"`, `"arm64"`.
 pub fn macho_architectures(bytes: &[u8]) -> Result<Vec<&'static str>, NotALibrary> {
     use object::{Architecture as A, BinaryFormat as F};
@@ -169,25 +203,25 @@ pub fn select_binaries(
     cross_dir: Option<&Path>,
     name: &str,
     wanted: Option<&[String]>,
-) -> Result<Vec<(String, PathBuf)>, String> {
+) -> Result<Vec<(String, PathBuf)>, SelectError> {
     let cross = |platform: &str| -> Option<PathBuf> {
         let file = library_file_name(platform, name)?;
         cross_dir.map(|d| d.join(platform).join(file)).filter(|p| p.is_file())
     };
     let Some(wanted) = wanted else {
-        let host = host.ok_or_else(|| format!("no {name} library built for {}", PLATFORM.0))?;
+        let host = host.ok_or_else(|| SelectError::NoHostLibrary { name: name.to_owned(), platform: PLATFORM.0 })?;
         let mut found = vec![(PLATFORM.0.to_owned(), host)];
         found.extend(PLATFORMS.iter().filter(|(p, _)| *p != PLATFORM.0).filter_map(|(p, _)| Some((p.to_string(), cross(p)?))));
         return Ok(found);
     };
     if wanted.is_empty() {
-        return Err("no platform asked for".into());
+        return Err(SelectError::NoPlatformAsked);
     }
     let mut found: Vec<(String, PathBuf)> = Vec::new();
     let mut missing = Vec::new();
     for platform in wanted {
         if library_extension(platform).is_none() {
-            return Err(format!("unknown platform {platform:?} (known: {})", platform_names()));
+            return Err(SelectError::UnknownPlatform { platform: platform.clone(), known: platform_names() });
         }
         if found.iter().any(|(p, _)| p == platform) || missing.contains(&platform.as_str()) {
             continue;
@@ -199,8 +233,8 @@ pub fn select_binaries(
         }
     }
     if !missing.is_empty() {
-        let looked = cross_dir.map_or("no folder of cross builds".to_owned(), |d| format!("looked in {}", d.display()));
-        return Err(format!("no {name} library built for {} ({looked})", missing.join(", ")));
+        let missing = missing.into_iter().map(str::to_owned).collect();
+        return Err(SelectError::NotBuilt { name: name.to_owned(), missing, looked_in: cross_dir.map(Path::to_path_buf) });
     }
     Ok(found)
 }

@@ -64,11 +64,11 @@ fn every_cross_build_found_is_chosen_and_each_one_asked_for_must_exist() {
     assert_eq!(only[0].0, "win64");
 
     let asked = ["linux64", "win64", "aarch64-linux", "darwin32"].map(String::from);
-    let e = select_binaries(Some(host.clone()), Some(&cross), "m", Some(&asked)).unwrap_err();
+    let e = select_binaries(Some(host.clone()), Some(&cross), "m", Some(&asked)).unwrap_err().to_string();
     assert!(e.contains("aarch64-linux, darwin32") && e.contains("looked in"), "{e}");
-    let e = select_binaries(Some(host.clone()), None, "m", Some(&["win64".to_owned()])).unwrap_err();
+    let e = select_binaries(Some(host.clone()), None, "m", Some(&["win64".to_owned()])).unwrap_err().to_string();
     assert!(e.contains("win64") && e.contains("no folder of cross builds"), "{e}");
-    let e = select_binaries(Some(host), Some(&cross), "m", Some(&["amiga".to_owned()])).unwrap_err();
+    let e = select_binaries(Some(host), Some(&cross), "m", Some(&["amiga".to_owned()])).unwrap_err().to_string();
     assert!(e.contains("unknown platform \"amiga\""), "{e}");
     // No cross folder at all: the host's library alone.
     let (d2, host2) = cross_folder(&[]);

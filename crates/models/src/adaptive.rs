@@ -178,7 +178,7 @@ impl AdaptiveCompensatorModel {
         law: AdaptationLaw,
         fingerprint: u32,
     ) -> Result<Self, BuildError> {
-        check_law(&law).map_err(BuildError::Spec)?;
+        check_law(&law)?;
         let mut b = TableBuilder::new();
         let (core, which) = NetCompensator::new(&mut b, joints, friction, gravity, enable)?;
         let signal = per_joint(&mut b, joints, |b, i| {
@@ -286,8 +286,8 @@ impl AdaptiveCompensatorModel {
 
     /// Writes [`Self::adapted_nets`] into `folder` (made if missing), each file through a
     /// temporary file and a rename, so none is left half-written.
-    pub fn write_adapted_nets(&self, folder: &Path) -> Result<(), String> {
-        std::fs::create_dir_all(folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+    pub fn write_adapted_nets(&self, folder: &Path) -> Result<(), WriteError> {
+        std::fs::create_dir_all(folder).map_err(|source| WriteError { path: folder.to_path_buf(), source })?;
         for (name, file) in self.adapted_nets() {
             let path = folder.join(&name);
             // A name no other writer uses (this process, this instance), in the same folder so
@@ -296,7 +296,7 @@ impl AdaptiveCompensatorModel {
             let written = std::fs::write(&partial, file.to_json()).and_then(|()| std::fs::rename(&partial, &path));
             if let Err(e) = written {
                 let _ = std::fs::remove_file(&partial);
-                return Err(format!("{}: {e}", path.display()));
+                return Err(WriteError { path, source: e });
             }
         }
         Ok(())
@@ -458,7 +458,27 @@ fn set_weight(net: &mut EncodedNet, output: usize, j: usize, value: f64) {
 }
 
 /// Refuses gains, leakage or bounds that are negative or not finite, naming the parameter.
-fn check_law(law: &AdaptationLaw) -> Result<(), String> {
+/// A file or folder that could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct WriteError {
+    /// The file or folder.
+    pub path: std::path::PathBuf,
+    /// What failed.
+    pub source: std::io::Error,
+}
+
+/// A parameter of an adaptation law that is negative or not finite.
+#[derive(Debug, thiserror::Error)]
+#[error("{name} = {value} must be a finite number >= 0")]
+pub struct LawError {
+    /// The parameter.
+    pub name: &'static str,
+    /// Its value.
+    pub value: f64,
+}
+
+fn check_law(law: &AdaptationLaw) -> Result<(), LawError> {
     for (name, value) in [
         ("gain_friction", law.gain_friction),
         ("gain_gravity", law.gain_gravity),
@@ -467,7 +487,7 @@ fn check_law(law: &AdaptationLaw) -> Result<(), String> {
         ("bound_gravity", law.bound_gravity),
     ] {
         if !(value.is_finite() && value >= 0.0) {
-            return Err(format!("{name} = {value} must be a finite number >= 0"));
+            return Err(LawError { name, value });
         }
     }
     Ok(())

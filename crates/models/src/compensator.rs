@@ -106,8 +106,107 @@ pub(crate) fn load_nets(
     let gravity_net = gravity.map(&mut load).transpose()?;
     // Named by their resource files, so a refusal says which file is wrong.
     let named: Vec<(&str, &WeightsFile)> = friction.iter().map(String::as_str).zip(&friction_nets).collect();
-    check_compensator_nets(&named, gravity.zip(gravity_net.as_ref())).map_err(BuildError::Spec)?;
+    check_compensator_nets(&named, gravity.zip(gravity_net.as_ref()))?;
     Ok((friction_nets, gravity_net, crc.finalize()))
+}
+
+/// Why nets do not fit together as a compensator ([`check_compensator_nets`]); each names the
+/// net by the name it was given with (its file).
+#[derive(Debug, thiserror::Error)]
+pub enum NetsError {
+    /// A net whose weights do not make a network.
+    #[error("{name}: {reason}")]
+    Invalid {
+        /// The net's name.
+        name: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// Two friction nets with the same weights.
+    #[error("{name} and {other} hold the same net: give each joint its own friction net")]
+    SameFrictionNet {
+        /// The later net.
+        name: String,
+        /// The earlier net with the same weights.
+        other: String,
+    },
+    /// The gravity net is also given as a friction net.
+    #[error("{name} and {other} hold the same net")]
+    GravityAlsoFriction {
+        /// The gravity net.
+        name: String,
+        /// The friction net with the same weights.
+        other: String,
+    },
+    /// A gravity net given as a friction net.
+    #[error("{name} is a gravity net, given as the friction net of joint {joint}")]
+    GravityAsFriction {
+        /// The net's name.
+        name: String,
+        /// The joint it was given for (1-based).
+        joint: usize,
+    },
+    /// A friction net given out of joint order.
+    #[error("{name} is the friction net of joint {claimed} (by its {by}), given as net {joint} of {count}: give them in joint order (given: {order})")]
+    JointOrder {
+        /// The net's name.
+        name: String,
+        /// The joint the net says it is for (1-based).
+        claimed: usize,
+        /// What says so: its recorded joint or its input's name.
+        by: &'static str,
+        /// Its place in the list (1-based).
+        joint: usize,
+        /// How many friction nets were given.
+        count: usize,
+        /// The names given, in order.
+        order: String,
+    },
+    /// A friction net given as the gravity net.
+    #[error("{name} is the {described}, given as the gravity net")]
+    FrictionAsGravity {
+        /// The net's name.
+        name: String,
+        /// What the net is.
+        described: String,
+    },
+    /// A gravity net without one torque output per angle input.
+    #[error("{name}: a gravity net has one torque output per angle input, not {inputs} inputs and {outputs} outputs")]
+    GravityShape {
+        /// The net's name.
+        name: String,
+        /// Its inputs.
+        inputs: usize,
+        /// Its outputs.
+        outputs: usize,
+    },
+    /// Friction nets for another joint count than the gravity net's.
+    #[error("{friction} friction nets but the gravity net {name} is for {joints} joints: give one friction net per joint")]
+    JointCount {
+        /// The friction nets given.
+        friction: usize,
+        /// The gravity net's name.
+        name: String,
+        /// The gravity net's joints.
+        joints: usize,
+    },
+    /// A recorded unit other than the compensator's.
+    #[error("{name}: {what} '{signal}' is in {unit}, the compensator works in {expected}")]
+    Unit {
+        /// The net's name.
+        name: String,
+        /// "input" or "output".
+        what: &'static str,
+        /// The signal's name.
+        signal: String,
+        /// Its recorded unit.
+        unit: String,
+        /// The unit the compensator works in.
+        expected: &'static str,
+    },
+    /// No net at all.
+    #[error("give friction nets, a gravity net, or both")]
+    NoNets,
 }
 
 /// Checks that the nets fit together as a compensator and returns its joint count: each
@@ -116,61 +215,65 @@ pub(crate) fn load_nets(
 /// net that is one, recorded units that are the compensator's (rad, rad/s, N·m; an empty unit
 /// is not checked), and as many friction nets as the gravity net has angles. Each net comes
 /// with the name messages use for it (its file).
-pub fn check_compensator_nets(friction: &[(&str, &WeightsFile)], gravity: Option<(&str, &WeightsFile)>) -> Result<usize, String> {
+pub fn check_compensator_nets(friction: &[(&str, &WeightsFile)], gravity: Option<(&str, &WeightsFile)>) -> Result<usize, NetsError> {
     for (place, (name, file)) in friction.iter().enumerate() {
-        let joint = place + 1;
-        file.network().map_err(|e| format!("{name}: {e}"))?;
-        if let Some((other, _)) = friction[..place].iter().find(|(_, f)| same_weights(f, file)) {
-            return Err(format!("{name} and {other} hold the same net: give each joint its own friction net"));
-        }
-        let claimed = match file.kind {
-            NetKind::Friction => file.joint,
-            NetKind::Gravity => return Err(format!("{name} is a gravity net, given as the friction net of joint {joint}")),
-            NetKind::Unspecified => file.inputs.first().and_then(|s| s.name.strip_prefix("qd_")).and_then(|j| j.parse().ok()),
-        };
-        if let Some(claimed) = claimed.filter(|&c| c != joint) {
-            let order = friction.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ");
-            return Err(format!(
-                "{name} is the friction net of joint {claimed} (by its {}), given as net {joint} of {}: give them in joint order (given: {order})",
-                if file.kind == NetKind::Friction { "recorded joint" } else { "input's name" },
-                friction.len()
-            ));
-        }
-        check_units(name, "input", &file.inputs, "rad/s")?;
-        check_units(name, "output", &file.outputs, "N.m")?;
+        check_friction_net(friction, place, name, file)?;
     }
     let joints = match gravity {
-        Some((name, file)) => {
-            file.network().map_err(|e| format!("{name}: {e}"))?;
-            if file.kind == NetKind::Friction {
-                return Err(format!("{name} is the {}, given as the gravity net", file.describe()));
-            }
-            if let Some((other, _)) = friction.iter().find(|(_, f)| same_weights(f, file)) {
-                return Err(format!("{name} and {other} hold the same net"));
-            }
-            check_units(name, "input", &file.inputs, "rad")?;
-            check_units(name, "output", &file.outputs, "N.m")?;
-            let n = file.inputs.len();
-            if file.outputs.len() != n {
-                return Err(format!(
-                    "{name}: a gravity net has one torque output per angle input, not {n} inputs and {} outputs",
-                    file.outputs.len()
-                ));
-            }
-            if !friction.is_empty() && friction.len() != n {
-                return Err(format!(
-                    "{} friction nets but the gravity net {name} is for {n} joints: give one friction net per joint",
-                    friction.len()
-                ));
-            }
-            n
-        }
+        Some((name, file)) => check_gravity_net(friction, name, file)?,
         None => friction.len(),
     };
     if joints == 0 {
-        return Err("give friction nets, a gravity net, or both".into());
+        return Err(NetsError::NoNets);
     }
     Ok(joints)
+}
+
+/// Checks the friction net at `place` (0-based) of `friction`, called `name`.
+fn check_friction_net(friction: &[(&str, &WeightsFile)], place: usize, name: &str, file: &WeightsFile) -> Result<(), NetsError> {
+    let joint = place + 1;
+    file.network().map_err(|e| NetsError::Invalid { name: name.to_owned(), reason: e.to_string() })?;
+    if let Some((other, _)) = friction[..place].iter().find(|(_, f)| same_weights(f, file)) {
+        return Err(NetsError::SameFrictionNet { name: name.to_owned(), other: (*other).to_owned() });
+    }
+    let claimed = match file.kind {
+        NetKind::Friction => file.joint,
+        NetKind::Gravity => return Err(NetsError::GravityAsFriction { name: name.to_owned(), joint }),
+        NetKind::Unspecified => file.inputs.first().and_then(|s| s.name.strip_prefix("qd_")).and_then(|j| j.parse().ok()),
+    };
+    if let Some(claimed) = claimed.filter(|&c| c != joint) {
+        return Err(NetsError::JointOrder {
+            name: name.to_owned(),
+            claimed,
+            by: if file.kind == NetKind::Friction { "recorded joint" } else { "input's name" },
+            joint,
+            count: friction.len(),
+            order: friction.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
+        });
+    }
+    check_units(name, "input", &file.inputs, "rad/s")?;
+    check_units(name, "output", &file.outputs, "N.m")
+}
+
+/// Checks the gravity net `name` against the friction nets; its joint count.
+fn check_gravity_net(friction: &[(&str, &WeightsFile)], name: &str, file: &WeightsFile) -> Result<usize, NetsError> {
+    file.network().map_err(|e| NetsError::Invalid { name: name.to_owned(), reason: e.to_string() })?;
+    if file.kind == NetKind::Friction {
+        return Err(NetsError::FrictionAsGravity { name: name.to_owned(), described: file.describe() });
+    }
+    if let Some((other, _)) = friction.iter().find(|(_, f)| same_weights(f, file)) {
+        return Err(NetsError::GravityAlsoFriction { name: name.to_owned(), other: (*other).to_owned() });
+    }
+    check_units(name, "input", &file.inputs, "rad")?;
+    check_units(name, "output", &file.outputs, "N.m")?;
+    let n = file.inputs.len();
+    if file.outputs.len() != n {
+        return Err(NetsError::GravityShape { name: name.to_owned(), inputs: n, outputs: file.outputs.len() });
+    }
+    if !friction.is_empty() && friction.len() != n {
+        return Err(NetsError::JointCount { friction: friction.len(), name: name.to_owned(), joints: n });
+    }
+    Ok(n)
 }
 
 /// Whether two files hold the same weights (whatever their names say).
@@ -184,10 +287,10 @@ fn same_weights(a: &WeightsFile, b: &WeightsFile) -> bool {
 }
 
 /// Refuses a recorded unit other than `expected` (N·m also as `N·m` or `Nm`).
-fn check_units(name: &str, what: &str, signals: &[Signal], expected: &str) -> Result<(), String> {
+fn check_units(name: &str, what: &'static str, signals: &[Signal], expected: &'static str) -> Result<(), NetsError> {
     let same = |unit: &str| unit == expected || (expected == "N.m" && matches!(unit, "N·m" | "Nm" | "N m"));
     match signals.iter().find(|s| !s.unit.is_empty() && !same(&s.unit)) {
-        Some(s) => Err(format!("{name}: {what} '{}' is in {}, the compensator works in {expected}", s.name, s.unit)),
+        Some(s) => Err(NetsError::Unit { name: name.to_owned(), what, signal: s.name.clone(), unit: s.unit.clone(), expected }),
         None => Ok(()),
     }
 }
@@ -235,7 +338,7 @@ impl NetCompensator {
         neurarm_physics::arm::check_joint_count(joints)?;
         let names: Vec<String> = (1..=friction.len()).map(|i| format!("friction net {i}")).collect();
         let named: Vec<(&str, &WeightsFile)> = names.iter().map(String::as_str).zip(friction).collect();
-        let found = check_compensator_nets(&named, gravity.map(|g| ("the gravity net", g))).map_err(BuildError::Spec)?;
+        let found = check_compensator_nets(&named, gravity.map(|g| ("the gravity net", g)))?;
         if found != joints {
             return Err(BuildError::Spec(format!("the nets are for {found} joints, the compensator for {joints}")));
         }

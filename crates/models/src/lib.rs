@@ -28,7 +28,7 @@ use neurarm_fmi_export::{DefaultExperiment, DescriptionError, Model, ModelDescri
 use serde::{Deserialize, Serialize};
 
 pub use adaptive::{AdaptationLaw, AdaptiveCompensatorSpec};
-pub use compensator::{check_compensator_nets, NnCompensatorSpec};
+pub use compensator::{check_compensator_nets, NetsError, NnCompensatorSpec};
 pub use ideal::IdealCompensatorSpec;
 pub use joint::JointControllerSpec;
 pub use planar_arm::PlanarArmSpec;
@@ -50,6 +50,15 @@ pub enum BuildError {
     /// The spec is inconsistent.
     #[error("{0}")]
     Spec(String),
+    /// The compensator's nets do not fit together.
+    #[error(transparent)]
+    Nets(#[from] NetsError),
+    /// The adaptation law's parameters are out of range.
+    #[error(transparent)]
+    Law(#[from] adaptive::LawError),
+    /// The spec file is no valid spec.
+    #[error(transparent)]
+    SpecFile(#[from] SpecFileError),
     /// A weights file is missing or invalid.
     #[error("weights file {path}: {message}")]
     Weights {
@@ -168,10 +177,16 @@ impl FmuSpec {
     }
 
     /// Parses a spec.
-    pub fn from_toml(text: &str) -> Result<Self, String> {
-        toml::from_str(text).map_err(|e| e.to_string().trim_end().to_owned())
+    pub fn from_toml(text: &str) -> Result<Self, SpecFileError> {
+        toml::from_str(text).map_err(SpecFileError)
     }
 }
+
+/// A spec file that is no valid spec (TOML syntax, an unknown key or kind, a wrong type). Its
+/// message is the TOML parser's, with line and column.
+#[derive(Debug, thiserror::Error)]
+#[error("{}", .0.to_string().trim_end())]
+pub struct SpecFileError(toml::de::Error);
 
 /// The factory behind every neurarm FMU binary: reads `resources/neurarm.toml`.
 pub fn instantiate(resources: Option<&Path>) -> Result<Box<dyn Model>, ModelError> {
@@ -227,9 +242,9 @@ mod tests {
         assert!(text.contains("kind = \"Gain\""), "{text}");
         assert_eq!(FmuSpec::from_toml(&text).unwrap(), spec);
         let e = FmuSpec::from_toml(&text.replace("k = 2.5", "k = 2.5\ngain = 3.0")).unwrap_err();
-        assert!(e.contains("unknown field `gain`"), "{e}");
+        assert!(e.to_string().contains("unknown field `gain`"), "{e}");
         let e = FmuSpec::from_toml(&text.replace("kind = \"Gain\"", "kind = \"Wheel\"")).unwrap_err();
-        assert!(e.contains("Wheel"), "{e}");
+        assert!(e.to_string().contains("Wheel"), "{e}");
     }
 
     #[test]

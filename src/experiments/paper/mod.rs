@@ -188,7 +188,7 @@ impl<'a> Stages<'a> {
         let toml = self.systems_dir.join(format!("{name}.toml"));
         let text = format!(
             "# The {name} loop of `neurarm paper`{purpose}; rerun it with\n# neurarm simulate {name}.toml -o {name}.csv\n\n{}",
-            spec.to_toml().map_err(anyhow::Error::msg)?
+            spec.to_toml()?
         );
         write_text_atomic(&toml, &text).with_context(|| format!("writing {}", toml.display()))?;
         let ssp = self.out.join(format!("{name}.ssp"));
@@ -235,7 +235,7 @@ impl<'a> Stages<'a> {
         fmus.sort();
         for fmu in fmus {
             let name = fmu.file_name().expect("a file from read_dir has a name");
-            crate::export::export_fmi3_twin(&fmu, &twins.join(name)).map_err(anyhow::Error::msg)?;
+            crate::export::export_fmi3_twin(&fmu, &twins.join(name))?;
         }
         self.lap("FMI 3.0 twins");
         Ok(())

@@ -63,8 +63,7 @@ impl Stages<'_> {
         let a = &self.settings.adaptation;
         let export = |id: &str, model: ModelSpec, sources: &[(String, PathBuf)]| -> Result<PathBuf> {
             let path = self.fmu_dir.join(format!("{id}.fmu"));
-            export_fmu_for(&FmuSpec { identifier: id.into(), model }, sources, &path, self.settings.platforms.as_deref())
-                .map_err(anyhow::Error::msg)?;
+            export_fmu_for(&FmuSpec { identifier: id.into(), model }, sources, &path, self.settings.platforms.as_deref())?;
             Ok(path)
         };
         let real = self.arms.real.arm.clone().with_base_angle(std::f64::consts::FRAC_PI_2);
