@@ -13,8 +13,8 @@ use crate::identify::{
 };
 use crate::table::{header_cell, write_atomic, write_text_atomic, NumericTable};
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
+use neurarm_nn::{EpochInfo, InputEncoding};
 use neurarm_physics::arm::ArmParams;
-use neurarm_physics::nn::{EpochInfo, InputEncoding};
 
 /// Writes joint `joint`'s (1-based) friction pairs: `qd_J [rad/s]`, `tau_friction_J [N.m]`,
 /// `samples`, and, when `path` is a file, the identification's verdicts as JSON beside them

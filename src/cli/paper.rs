@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Args;
+use neurarm_nn::InputEncoding;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::ReferencePlacement;
-use neurarm_physics::nn::InputEncoding;
 
 use super::common::{load_config, parse_angle_encoding, PlatformArgs};
 

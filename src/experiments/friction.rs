@@ -9,9 +9,9 @@ use super::{identification_internal_step, joint_loop, lightest_inertias, master,
 pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_nn::encoding::LOG_SPEED_SCALE_RAD_S;
+use neurarm_nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::arm::{coriolis_of_one_joint_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
-use neurarm_physics::nn::encoding::LOG_SPEED_SCALE_RAD_S;
-use neurarm_physics::nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};
 
 /// How the friction runs hold the joints that are not driven.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -462,7 +462,7 @@ pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_
     // jump is anywhere, as it rarely holds a pair near q̇ = 0, and scoring at the pairs alone
     // let a net overshoot between the pair at rest and the first moving one.
     const STARTS: u64 = 10;
-    let mut best: Option<(f64, TrainSettings, neurarm_physics::nn::Trained)> = None;
+    let mut best: Option<(f64, TrainSettings, neurarm_nn::Trained)> = None;
     for start in 0..STARTS {
         let mut settings =
             TrainSettings { hidden: 15, restarts: 1, max_fail: 20, seed: seed + joint as u64 + 7919 * start, ..TrainSettings::default() };
@@ -470,7 +470,7 @@ pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_
         // (the first split seed from there that does), or the jump lands anywhere in the band.
         if let Some(rest) = pairs.iter().position(|p| p.0 == 0.0) {
             for _ in 0..1000 {
-                if neurarm_physics::nn::lm::split(pairs.len(), settings.split, settings.seed)[0].contains(&rest) {
+                if neurarm_nn::lm::split(pairs.len(), settings.split, settings.seed)[0].contains(&rest) {
                     break;
                 }
                 settings.seed += 1000;

@@ -12,8 +12,8 @@ use super::friction::FrictionCurve;
 use super::{identification_internal_step, joint_loop, master, parallel, GravityDesign, Settings};
 use crate::identify::{gravity_pair, GravityCorrection, GravityOptions, PassFault, PassWindow};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::arm::{gravity_torques, inverse_dynamics_rnea_into, ArmData, ArmParams};
-use neurarm_physics::nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 
 /// One averaged measurement: the mean of the up and down passes' angles [rad] and torques [N·m].
 pub type GravityPair = (Vec<f64>, Vec<f64>);

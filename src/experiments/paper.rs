@@ -13,7 +13,7 @@ use super::gravity::{gravity_pair_error, GravityNetErrors};
 use super::gravity_study::{gravity_study, GravityStudy};
 use super::*;
 use crate::table::{write_text_atomic, writing};
-use neurarm_physics::nn::{InputEncoding, WeightsFile};
+use neurarm_nn::{InputEncoding, WeightsFile};
 
 /// The paper's Table 1 [m²]: sim perfect, sim NN, sim none, real NN, real none.
 pub const PAPER_TABLE_1: [f64; 5] = [0.0014, 0.0016, 0.0248, 0.0071, 0.0291];

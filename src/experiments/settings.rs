@@ -6,10 +6,10 @@ use std::f64::consts::PI;
 use serde::Serialize;
 
 use super::{tracking_start, FrictionHold};
+use neurarm_nn::InputEncoding;
 use neurarm_physics::arm::FrictionBranch;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
-use neurarm_physics::nn::InputEncoding;
 
 /// Fewest joints the experiments take: the task-space loop tracks a planar position.
 pub const MIN_JOINTS: usize = 2;

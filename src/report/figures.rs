@@ -8,7 +8,7 @@ use super::plot::{write_png, Panel, Series, Style};
 use crate::experiments::gravity_study::GravityStudy;
 use crate::experiments::paper::PaperRun;
 use crate::experiments::{GravityDesign, LoopRun};
-use neurarm_physics::nn::InputEncoding;
+use neurarm_nn::InputEncoding;
 
 /// Most points of a scatter series: more only slows the PNG down.
 const MAX_SCATTER: usize = 2000;

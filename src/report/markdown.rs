@@ -7,7 +7,7 @@ use super::figures::real_label;
 use crate::experiments::gravity::{RegionErrors, STEADY_RETRIES, STEADY_SHARE};
 use crate::experiments::paper::{Cases, PaperRun};
 use crate::experiments::{GravityDesign, RealOrigin, GRAVITY_SWEEP_SPEED_RAD_S};
-use neurarm_physics::nn::InputEncoding;
+use neurarm_nn::InputEncoding;
 
 fn row(cells: &[String]) -> String {
     format!("| {} |", cells.join(" | "))

@@ -43,11 +43,11 @@ pub fn write_report(out: &Path, run: &PaperRun) -> Result<(), String> {
             .chain((1..=n).map(|i| format!("rms_share_{i}")))
             .chain((1..=n).map(|i| format!("max_share_{i}")))
             .collect();
-        let encoding_code = |e: neurarm_physics::nn::InputEncoding| match e {
-            neurarm_physics::nn::InputEncoding::Raw => 0.0,
-            neurarm_physics::nn::InputEncoding::JointAngles => 1.0,
-            neurarm_physics::nn::InputEncoding::LinkAngles => 2.0,
-            neurarm_physics::nn::InputEncoding::LogSpeed => 3.0,
+        let encoding_code = |e: neurarm_nn::InputEncoding| match e {
+            neurarm_nn::InputEncoding::Raw => 0.0,
+            neurarm_nn::InputEncoding::JointAngles => 1.0,
+            neurarm_nn::InputEncoding::LinkAngles => 2.0,
+            neurarm_nn::InputEncoding::LogSpeed => 3.0,
         };
         let rows = study.points.iter().map(|p| {
             let grid = match p.design {

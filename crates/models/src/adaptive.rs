@@ -39,7 +39,7 @@ use std::path::Path;
 
 use fmi2_export::codec::{Put, Reader};
 use fmi2_export::{BooleanVar, Causality, Model, ModelDescription, ModelError, RealVar, StringVar, TableBuilder, Values, Variability};
-use neurarm_physics::nn::{EncodedNet, WeightsFile};
+use neurarm_nn::{EncodedNet, WeightsFile};
 use serde::{Deserialize, Serialize};
 
 use crate::compensator::{load_nets, NetCompensator};

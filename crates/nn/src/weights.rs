@@ -5,10 +5,10 @@ use std::path::Path;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use super::encoding::{EncodedNet, InputEncoding};
-use super::lm::{TrainReport, TrainSettings};
-use super::mlp::{MinMaxScaling, Mlp};
-use crate::arm::show_number;
+use crate::encoding::{EncodedNet, InputEncoding};
+use crate::lm::{TrainReport, TrainSettings};
+use crate::mlp::{MinMaxScaling, Mlp};
+use crate::text::{read_text, show_number};
 
 /// Value of `format` in every weights file.
 pub const FORMAT: &str = "neurarm-weights";
@@ -19,7 +19,7 @@ pub const VERSION: u32 = 3;
 /// Limits a weights file must keep to be read, so that a file that parses but holds no
 /// usable net (a billion inputs, a weight of 1e308) is refused by name instead of exhausting
 /// memory or turning every output into infinity. This trainer makes nets of at most
-/// [`MAX_HIDDEN`](super::lm::MAX_HIDDEN) neurons and [`MAX_WEIGHTS`](super::lm::MAX_WEIGHTS)
+/// [`MAX_HIDDEN`](crate::lm::MAX_HIDDEN) neurons and [`MAX_WEIGHTS`](crate::lm::MAX_WEIGHTS)
 /// weights; the limits leave room for nets trained elsewhere.
 pub mod read_limits {
     /// Inputs and outputs of a net, each.
@@ -33,6 +33,9 @@ pub mod read_limits {
     pub const WEIGHT: f64 = 1e8;
     /// Magnitude of a scaling bound (the range of a signal in its own unit).
     pub const SCALING: f64 = 1e15;
+    /// Size of the file [bytes]: a net of [`WEIGHTS`] weights written as pretty JSON is about
+    /// 30 MB.
+    pub const FILE_BYTES: u64 = 64 << 20;
 }
 
 /// What a net computes, so that a compensator can check it is given the right nets in the
@@ -316,8 +319,8 @@ impl WeightsFile {
     /// Reads and checks a weights file.
     pub fn read(path: &Path) -> Result<Self, WeightsError> {
         let shown = path.display().to_string();
-        let text = crate::text_file::read_text(path, crate::text_file::MAX_WEIGHTS_BYTES)
-            .map_err(|e| WeightsError::Io { path: shown.clone(), message: e.to_string() })?;
+        let text =
+            read_text(path, read_limits::FILE_BYTES).map_err(|e| WeightsError::Io { path: shown.clone(), message: e.to_string() })?;
         Self::from_json(&text, &shown)
     }
 

@@ -8,7 +8,7 @@
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use super::mlp::Mlp;
+use crate::mlp::Mlp;
 
 /// The encoding of a net's inputs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -193,7 +193,7 @@ impl EncodedNet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nn::{MinMaxScaling, TrainReport, TrainSettings, WeightsFile};
+    use crate::{MinMaxScaling, TrainReport, TrainSettings, WeightsFile};
     use rand::{Rng, SeedableRng};
 
     fn random_net(encoding: InputEncoding, inputs: usize, seed: u64) -> EncodedNet {
@@ -245,7 +245,7 @@ mod tests {
         TrainReport {
             epochs: 0,
             best_epoch: 0,
-            stop_reason: crate::nn::StopReason::Epochs,
+            stop_reason: crate::StopReason::Epochs,
             restart: 0,
             train_mse: 0.0,
             validation_mse: None,
@@ -257,7 +257,7 @@ mod tests {
     #[test]
     fn the_weights_file_keeps_the_encoding_and_reads_version_1_files_as_raw() {
         let net = random_net(InputEncoding::LinkAngles, 2, 3);
-        let signals = |p: &str, n: usize| (0..n).map(|i| crate::nn::Signal { name: format!("{p}_{i}"), unit: "rad".into() }).collect();
+        let signals = |p: &str, n: usize| (0..n).map(|i| crate::Signal { name: format!("{p}_{i}"), unit: "rad".into() }).collect();
         let report = untrained_report();
         let file = WeightsFile::new(&net.mlp, signals("q", 2), signals("tau", 3), TrainSettings::default(), report)
             .with_encoding(InputEncoding::LinkAngles);
@@ -316,7 +316,7 @@ mod tests {
             ..net.mlp.clone()
         };
         let net = EncodedNet { encoding: InputEncoding::LogSpeed, mlp };
-        let signal = |n: &str, u: &str| vec![crate::nn::Signal { name: n.into(), unit: u.into() }];
+        let signal = |n: &str, u: &str| vec![crate::Signal { name: n.into(), unit: u.into() }];
         let report = untrained_report();
         let file = WeightsFile::new(&net.mlp, signal("qd_1", "rad/s"), signal("tau_friction_1", "N.m"), TrainSettings::default(), report)
             .with_encoding(InputEncoding::LogSpeed);

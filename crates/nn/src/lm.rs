@@ -38,10 +38,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::mlp::{MinMaxScaling, Mlp};
+use crate::linalg::{cholesky_shifted, cholesky_solve_factored};
+use crate::mlp::{MinMaxScaling, Mlp};
+use crate::parallel::{default_threads, ParallelFor, Pool, Serial, SharedSlice};
 use std::sync::Mutex;
-
-use crate::linalg::{cholesky_shifted, cholesky_solve_factored, ParallelFor, Serial, SharedSlice};
 
 /// How μ changes from epoch to epoch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -376,203 +376,6 @@ impl Part {
         c * SAMPLE_CHUNK..((c + 1) * SAMPLE_CHUNK).min(self.count)
     }
 }
-
-/// The number of threads training uses by default: `NEURARM_THREADS` if set to a positive
-/// number, otherwise the machine's available parallelism. Results do not depend on it.
-pub fn default_threads() -> usize {
-    std::env::var("NEURARM_THREADS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .filter(|&t: &usize| t > 0)
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-}
-
-/// Worker threads that live for one training and run the epochs' parallel parts. Spawning
-/// threads for every part costs ~70 µs a time on the machines measured, a tenth of an epoch;
-/// these workers instead spin briefly, then sleep, between parts.
-mod pool {
-    use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-    use std::sync::{Condvar, Mutex, MutexGuard};
-
-    use crate::linalg::ParallelFor;
-
-    type Task<'a> = dyn Fn(usize) + Sync + 'a;
-
-    /// A job in flight: the caller's task with its lifetime erased (see [`Pool::run`]).
-    #[derive(Clone, Copy)]
-    struct Job {
-        task: *const Task<'static>,
-        tasks: usize,
-    }
-
-    // SAFETY: the task is Sync, and the pointer is only followed while `run` keeps it alive.
-    unsafe impl Send for Job {}
-
-    struct State {
-        generation: u64,
-        job: Option<Job>,
-        /// Workers that took the current job and have not yet left it.
-        busy: usize,
-        shutdown: bool,
-    }
-
-    /// Spin iterations (≈ 0.1–0.3 ms) before a waiting thread sleeps: the gaps between an
-    /// epoch's parallel parts are shorter than that, and a sleeping thread takes tens of µs
-    /// to wake. After the first [`SPIN_HARD`] a spinning thread yields its core at every
-    /// iteration, so that on a machine busy with other work it does not hold up the thread
-    /// it waits for.
-    const SPIN: u32 = 1 << 14;
-    const SPIN_HARD: u32 = 1 << 11;
-
-    #[inline]
-    fn pause(spins: u32) {
-        if spins < SPIN_HARD {
-            std::hint::spin_loop();
-        } else {
-            std::thread::yield_now();
-        }
-    }
-
-    pub struct Pool {
-        state: Mutex<State>,
-        wake: Condvar,
-        idle: Condvar,
-        /// Mirrors of `state.generation` and `state.busy` for spinning without the lock.
-        generation: AtomicU64,
-        busy: AtomicUsize,
-        next: AtomicUsize,
-        workers: usize,
-    }
-
-    impl Pool {
-        /// A pool for `threads` threads in all: the caller and `threads − 1` workers, each of
-        /// which must call [`Pool::serve`].
-        pub fn new(threads: usize) -> Self {
-            Self {
-                state: Mutex::new(State { generation: 0, job: None, busy: 0, shutdown: false }),
-                wake: Condvar::new(),
-                idle: Condvar::new(),
-                generation: AtomicU64::new(0),
-                busy: AtomicUsize::new(0),
-                next: AtomicUsize::new(0),
-                workers: threads.max(1) - 1,
-            }
-        }
-
-        pub fn workers(&self) -> usize {
-            self.workers
-        }
-
-        fn lock(&self) -> MutexGuard<'_, State> {
-            self.state.lock().unwrap_or_else(|e| e.into_inner())
-        }
-
-        fn claim(&self, task: &Task<'_>, tasks: usize) {
-            loop {
-                let i = self.next.fetch_add(1, Ordering::Relaxed);
-                if i >= tasks {
-                    break;
-                }
-                task(i);
-            }
-        }
-
-        /// A worker's loop: runs tasks of every job until [`Pool::shutdown`].
-        pub fn serve(&self) {
-            let mut seen = 0;
-            loop {
-                let mut spins = 0;
-                while self.generation.load(Ordering::Acquire) == seen && spins < SPIN {
-                    pause(spins);
-                    spins += 1;
-                }
-                let job = {
-                    let mut st = self.lock();
-                    while st.generation == seen && !st.shutdown {
-                        st = self.wake.wait(st).unwrap_or_else(|e| e.into_inner());
-                    }
-                    if st.shutdown {
-                        return;
-                    }
-                    seen = st.generation;
-                    let Some(job) = st.job else { continue };
-                    st.busy += 1;
-                    self.busy.store(st.busy, Ordering::Release);
-                    job
-                };
-                let _leave = Leave(self);
-                // SAFETY: `run` withdraws the job only after this worker has left it.
-                self.claim(unsafe { &*job.task }, job.tasks);
-            }
-        }
-
-        /// Ends every worker's [`Pool::serve`].
-        pub fn shutdown(&self) {
-            self.lock().shutdown = true;
-            self.wake.notify_all();
-        }
-    }
-
-    /// Marks a worker as having left its job (also when a task panics).
-    struct Leave<'a>(&'a Pool);
-
-    impl Drop for Leave<'_> {
-        fn drop(&mut self) {
-            let mut st = self.0.lock();
-            st.busy -= 1;
-            self.0.busy.store(st.busy, Ordering::Release);
-            if st.busy == 0 {
-                self.0.idle.notify_all();
-            }
-        }
-    }
-
-    /// Withdraws the caller's job once no worker is in it (also when a task panics).
-    struct Withdraw<'a>(&'a Pool);
-
-    impl Drop for Withdraw<'_> {
-        fn drop(&mut self) {
-            let mut spins = 0;
-            while self.0.busy.load(Ordering::Acquire) > 0 && spins < SPIN {
-                pause(spins);
-                spins += 1;
-            }
-            let mut st = self.0.lock();
-            while st.busy > 0 {
-                st = self.0.idle.wait(st).unwrap_or_else(|e| e.into_inner());
-            }
-            st.job = None;
-        }
-    }
-
-    impl ParallelFor for Pool {
-        fn run(&self, tasks: usize, task: &(dyn Fn(usize) + Sync)) {
-            if self.workers == 0 || tasks < 2 {
-                (0..tasks).for_each(task);
-                return;
-            }
-            let task: *const Task<'_> = task;
-            // SAFETY: only the lifetime is erased. Workers take the job under the lock and are
-            // counted in `busy`; `Withdraw` removes it under the lock once `busy` is 0, before
-            // this function returns or unwinds, so no worker follows the pointer after the
-            // borrow ends.
-            let task = unsafe { std::mem::transmute::<*const Task<'_>, *const Task<'static>>(task) };
-            {
-                let mut st = self.lock();
-                self.next.store(0, Ordering::Relaxed);
-                st.job = Some(Job { task, tasks });
-                st.generation += 1;
-                self.generation.store(st.generation, Ordering::Release);
-            }
-            self.wake.notify_all();
-            let _withdraw = Withdraw(self);
-            // SAFETY: the pointer was made from a reference alive for this whole call.
-            self.claim(unsafe { &*task }, tasks);
-        }
-    }
-}
-
-use pool::Pool;
 
 /// Hidden activations of one scaled sample `x̃` into `hidden` (length H). Four neurons at a
 /// time: each sum is a chain of dependent adds, so four independent chains keep the FPU busy
@@ -1007,22 +810,8 @@ pub fn train_with_threads(
     let [train_part, val_part, test_part] = [0, 1, 2].map(|i| Part::new(&xs, &ts, &parts[i]));
     let (n, k) = (inputs.nrows(), targets.nrows());
     let mut ws = Workspace::new(n, s.hidden, k, train_part.count, val_part.count.max(test_part.count));
-    let pool = Pool::new(threads);
     let parts = [&train_part, &val_part, &test_part];
-    std::thread::scope(|scope| {
-        for _ in 0..pool.workers() {
-            scope.spawn(|| pool.serve());
-        }
-        // Stops the workers however training ends (also by a panic in `on_epoch`).
-        struct Stop<'a>(&'a Pool);
-        impl Drop for Stop<'_> {
-            fn drop(&mut self) {
-                self.0.shutdown();
-            }
-        }
-        let _stop = Stop(&pool);
-        train_restarts(&mut ws, parts, (&input_scaling, &output_scaling), s, &pool, on_epoch)
-    })
+    Pool::scoped(threads, |pool| train_restarts(&mut ws, parts, (&input_scaling, &output_scaling), s, pool, on_epoch))
 }
 
 /// The restarts of [`train_with_threads`] on prepared data.
@@ -1198,14 +987,7 @@ pub fn normal_equations(net: &Mlp, x: &DMatrix<f64>, t: &DMatrix<f64>, threads: 
     let idx: Vec<usize> = (0..x.ncols()).collect();
     let part = Part::new(x, t, &idx);
     let mut ws = Workspace::new(net.inputs(), net.hidden(), net.outputs(), part.count, 0);
-    let pool = Pool::new(threads);
-    std::thread::scope(|scope| {
-        for _ in 0..pool.workers() {
-            scope.spawn(|| pool.serve());
-        }
-        ws.linearise(&net.parameters(), &part, &pool);
-        pool.shutdown();
-    });
+    Pool::scoped(threads, |pool| ws.linearise(&net.parameters(), &part, pool));
     let p = ws.p;
     for r in 0..p {
         for c in 0..r {
