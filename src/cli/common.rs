@@ -151,12 +151,12 @@ impl EpochBar {
 
 /// Parses a net's input encoding for clap.
 pub fn parse_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
-    InputEncoding::parse(text)
+    InputEncoding::parse(text).map_err(|e| e.to_string())
 }
 
 /// Parses a gravity net's input encoding (one of angles) for clap.
 pub fn parse_angle_encoding(text: &str) -> std::result::Result<InputEncoding, String> {
-    let encoding = InputEncoding::parse(text)?;
+    let encoding = InputEncoding::parse(text).map_err(|e| e.to_string())?;
     if encoding.is_of_angles() {
         Ok(encoding)
     } else {

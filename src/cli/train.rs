@@ -185,7 +185,7 @@ fn parse_damping(text: &str) -> std::result::Result<Damping, String> {
 
 /// Parses a net kind for clap.
 fn parse_kind(text: &str) -> std::result::Result<NetKind, String> {
-    NetKind::parse(text)
+    NetKind::parse(text).map_err(|e| e.to_string())
 }
 
 /// A stop reason as words.

@@ -565,7 +565,7 @@ impl FrictionNetError {
 /// The error of `net` (velocity → torque) against the friction law `law` (see
 /// [`FrictionNetError`]).
 pub fn friction_net_error(net: &WeightsFile, law: &JointFriction, min_speed: f64, max_speed: f64) -> Result<FrictionNetError, String> {
-    let mlp = net.network()?;
+    let mlp = net.network().map_err(|e| e.to_string())?;
     let steps = ((max_speed - min_speed) / 1e-3).round() as usize;
     let (mut sq, mut worst, mut largest, mut count) = (0.0, 0.0f64, 0.0f64, 0usize);
     for k in 0..=steps {

@@ -427,7 +427,7 @@ pub struct GravityNetErrors {
 pub fn gravity_net_errors(gravity_net: &WeightsFile, arm: &ArmParams, span: f64, settings: &Settings) -> Result<GravityNetErrors, String> {
     let vertical = arm.clone().with_base_angle(PI / 2.0);
     let n = arm.dof();
-    let net = gravity_net.network()?;
+    let net = gravity_net.network().map_err(|e| e.to_string())?;
     let periodic = net.encoding.is_periodic();
     let low = &gravity_net.input_scaling.min;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(settings.seed + 99);

@@ -23,7 +23,7 @@ pub fn write_figures(out: &Path, run: &PaperRun) -> Result<(), String> {
     for (k, tag) in ["simulated", real_label(run)].iter().enumerate() {
         let arm = if k == 0 { &run.arms.nominal.arm } else { &run.arms.real.arm };
         for j in 0..n {
-            let net = run.friction_nets[k * n + j].network()?;
+            let net = run.friction_nets[k * n + j].network().map_err(|e| e.to_string())?;
             let speeds: Vec<f64> = (-1000..=1000).map(|i| i as f64 * top / 1000.0).collect();
             let law = arm.friction[j];
             panels.push(Panel {

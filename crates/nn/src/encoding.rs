@@ -58,12 +58,9 @@ impl InputEncoding {
     }
 
     /// Parses [`InputEncoding::name`] (a `-` may stand for `_`).
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, UnknownEncoding> {
         let wanted = text.trim().replace('-', "_");
-        Self::ALL.into_iter().find(|e| e.name() == wanted).ok_or_else(|| {
-            let names: Vec<&str> = Self::ALL.iter().map(|e| e.name()).collect();
-            format!("unknown input encoding '{text}': use one of {}", names.join(", "))
-        })
+        Self::ALL.into_iter().find(|e| e.name() == wanted).ok_or_else(|| UnknownEncoding { text: text.into() })
     }
 
     /// True when the encoded net is 2π-periodic in every input.
@@ -128,6 +125,14 @@ impl InputEncoding {
         }
         out
     }
+}
+
+/// A name that is none of [`InputEncoding::ALL`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown input encoding '{text}': use one of {}", InputEncoding::ALL.map(InputEncoding::name).join(", "))]
+pub struct UnknownEncoding {
+    /// The name given.
+    pub text: String,
 }
 
 /// A two-layer net behind its input encoding: what a weights file describes.
@@ -276,7 +281,7 @@ mod tests {
         old["encoding"] = "link_angles".into();
         let e = WeightsFile::from_json(&old.to_string(), "old.json").unwrap_err().to_string();
         assert!(e.contains("version 1 file has raw inputs only"), "{e}");
-        assert!(InputEncoding::parse("polar").unwrap_err().contains("raw, joint_angles, link_angles, log_speed"));
+        assert!(InputEncoding::parse("polar").unwrap_err().to_string().contains("raw, joint_angles, link_angles, log_speed"));
         assert_eq!(InputEncoding::parse("link-angles"), Ok(InputEncoding::LinkAngles));
     }
 
@@ -325,7 +330,7 @@ mod tests {
         assert_eq!(back.encoding, InputEncoding::LogSpeed);
         // The encoded net at 3 mrad/s is the plain net at ln 4.
         assert_eq!(back.evaluate(&[3e-3]), net.mlp.evaluate(&[4f64.ln()]));
-        let e = file.gravity().network().unwrap_err();
+        let e = file.gravity().network().unwrap_err().to_string();
         assert!(e.contains("a gravity net takes angles"), "{e}");
     }
 }

@@ -21,7 +21,7 @@ pub mod parallel;
 pub mod text;
 pub mod weights;
 
-pub use encoding::{EncodedNet, InputEncoding};
+pub use encoding::{EncodedNet, InputEncoding, UnknownEncoding};
 pub use lm::{train, EpochInfo, StopReason, TrainReport, TrainSettings, Trained};
 pub use mlp::{MinMaxScaling, Mlp};
-pub use weights::{read_limits, NetKind, Signal, WeightsError, WeightsFile};
+pub use weights::{read_limits, NetError, NetKind, Signal, UnknownNetKind, WeightsError, WeightsFile};

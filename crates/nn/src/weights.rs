@@ -63,14 +63,22 @@ impl NetKind {
     }
 
     /// Parses [`NetKind::name`].
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, UnknownNetKind> {
         match text.trim() {
             "unspecified" => Ok(NetKind::Unspecified),
             "friction" => Ok(NetKind::Friction),
             "gravity" => Ok(NetKind::Gravity),
-            other => Err(format!("unknown net kind '{other}': use friction, gravity or unspecified")),
+            other => Err(UnknownNetKind { text: other.into() }),
         }
     }
+}
+
+/// A name that is no [`NetKind::name`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown net kind '{text}': use friction, gravity or unspecified")]
+pub struct UnknownNetKind {
+    /// The name given (trimmed).
+    pub text: String,
 }
 
 /// A named input or output with its unit.
@@ -122,24 +130,208 @@ pub struct WeightsFile {
     pub report: TrainReport,
 }
 
-/// Why a weights file cannot be used.
+/// Why a weights file cannot be used. The message is the file's name and what is wrong; the
+/// error inside is shown in it, so it is not also given as [`std::error::Error::source`] (a
+/// report of the chain would say it twice).
 #[derive(Debug, thiserror::Error)]
 pub enum WeightsError {
-    /// The file could not be read or written.
-    #[error("{path}: {message}")]
+    /// The file could not be read.
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: String,
         /// Why.
-        message: String,
+        error: std::io::Error,
     },
-    /// The file is not valid.
-    #[error("{path}: {message}")]
+    /// The file is not the JSON of a weights file.
+    #[error("{path}: {error}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// Where and why the JSON does not parse.
+        error: serde_json::Error,
+    },
+    /// The file parses but holds no usable net.
+    #[error("{path}: {error}")]
     Invalid {
         /// The file.
         path: String,
         /// What is wrong.
-        message: String,
+        error: NetError,
+    },
+}
+
+/// Why a weights file holds no usable net ([`WeightsFile::network`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NetError {
+    /// `format` is not [`FORMAT`].
+    #[error("format is '{format}', expected '{FORMAT}'")]
+    Format {
+        /// The format the file gives.
+        format: String,
+    },
+    /// A version this build does not read.
+    #[error("version {version} is not supported (this build reads versions 1 to {VERSION})")]
+    Version {
+        /// The version the file gives.
+        version: u32,
+    },
+    /// A version 1 file with an encoding (they came with version 2).
+    #[error("a version 1 file has raw inputs only, not the '{}' encoding", encoding.name())]
+    EncodingBeforeVersion2 {
+        /// The encoding the file gives.
+        encoding: InputEncoding,
+    },
+    /// A kind or a joint in a file before version 3.
+    #[error("a version {version} file records no kind or joint (they came with version 3)")]
+    KindBeforeVersion3 {
+        /// The version the file gives.
+        version: u32,
+    },
+    /// No inputs.
+    #[error("empty network: 0 inputs")]
+    NoInputs,
+    /// A friction net without its joint.
+    #[error("a friction net must name its joint (\"joint\": 1, 2, …)")]
+    FrictionWithoutJoint,
+    /// Joint 0.
+    #[error("joint 0: joints are numbered from 1")]
+    JointZero,
+    /// A friction net of other than one input and one output.
+    #[error("a friction net has 1 input (velocity) and 1 output (torque), not {inputs} and {outputs}")]
+    FrictionSignals {
+        /// Its inputs.
+        inputs: usize,
+        /// Its outputs.
+        outputs: usize,
+    },
+    /// A friction net's input encoded as angles.
+    #[error("a friction net takes the velocity raw or as '{}', not encoded as '{}'", InputEncoding::LogSpeed.name(), encoding.name())]
+    FrictionEncoding {
+        /// The encoding the file gives.
+        encoding: InputEncoding,
+    },
+    /// A gravity net's inputs encoded as speeds.
+    #[error("a gravity net takes angles, not speeds encoded as '{}'", encoding.name())]
+    GravityEncoding {
+        /// The encoding the file gives.
+        encoding: InputEncoding,
+    },
+    /// A gravity net of not one output per input.
+    #[error("a gravity net has one output per angle input, not {inputs} inputs and {outputs} outputs")]
+    GravitySignals {
+        /// Its inputs.
+        inputs: usize,
+        /// Its outputs.
+        outputs: usize,
+    },
+    /// A joint named by a net other than a friction net.
+    #[error("only a friction net names a joint; this {} names joint {joint}", kind.name())]
+    JointOfOtherKind {
+        /// The net's kind.
+        kind: NetKind,
+        /// The joint it names.
+        joint: usize,
+    },
+    /// No hidden neurons or no outputs.
+    #[error("empty network: {hidden} hidden neurons, {outputs} outputs")]
+    Empty {
+        /// Hidden neurons.
+        hidden: usize,
+        /// Outputs.
+        outputs: usize,
+    },
+    /// More inputs or outputs than [`read_limits::SIGNALS`].
+    #[error("{inputs} inputs and {outputs} outputs: a net may have at most {} of each (read_limits::SIGNALS)", read_limits::SIGNALS)]
+    TooManySignals {
+        /// Inputs.
+        inputs: usize,
+        /// Outputs.
+        outputs: usize,
+    },
+    /// More hidden neurons than [`read_limits::HIDDEN`].
+    #[error("{hidden} hidden neurons: a net may have at most {} (read_limits::HIDDEN)", read_limits::HIDDEN)]
+    TooManyHidden {
+        /// Hidden neurons.
+        hidden: usize,
+    },
+    /// More weights and biases than [`read_limits::WEIGHTS`].
+    #[error("{weights} weights and biases: a net may have at most {} (read_limits::WEIGHTS)", read_limits::WEIGHTS)]
+    TooManyWeights {
+        /// Weights and biases.
+        weights: usize,
+    },
+    /// A weight matrix (`iw`, `lw`) of the wrong number of rows.
+    #[error("{layer} has {rows} rows, expected {expected}")]
+    Rows {
+        /// `iw` or `lw`.
+        layer: &'static str,
+        /// Rows in the file.
+        rows: usize,
+        /// Rows the sizes of the net need.
+        expected: usize,
+    },
+    /// A row of a weight matrix of the wrong length.
+    #[error("{layer} row {row} has {values} values, expected {expected}")]
+    RowLength {
+        /// `iw` or `lw`.
+        layer: &'static str,
+        /// The row (0-based).
+        row: usize,
+        /// Values in the row.
+        values: usize,
+        /// Values the sizes of the net need.
+        expected: usize,
+    },
+    /// Output biases of the wrong number.
+    #[error("b2 has {values} values, expected {expected}")]
+    OutputBiases {
+        /// Values in the file.
+        values: usize,
+        /// One per output.
+        expected: usize,
+    },
+    /// A scaling of the wrong length.
+    #[error("{scaling} has {min}/{max} min/max values, expected {expected}")]
+    ScalingLength {
+        /// `input_scaling` or `output_scaling`.
+        scaling: &'static str,
+        /// Values of `min`.
+        min: usize,
+        /// Values of `max`.
+        max: usize,
+        /// One per encoded input or per output.
+        expected: usize,
+    },
+    /// A scaling row whose min is not at most its max.
+    #[error("{scaling} row {row}: min {min} is not <= max {max}")]
+    ScalingOrder {
+        /// `input_scaling` or `output_scaling`.
+        scaling: &'static str,
+        /// The row (0-based).
+        row: usize,
+        /// Its min.
+        min: f64,
+        /// Its max.
+        max: f64,
+    },
+    /// A weight, bias or scaling bound that is NaN or infinite.
+    #[error("a weight or scaling value is {value}, not a finite number")]
+    NotFinite {
+        /// The value.
+        value: f64,
+    },
+    /// A weight or bias beyond [`read_limits::WEIGHT`].
+    #[error("a weight or bias is {}: beyond ±1e8 (read_limits::WEIGHT) no trained net has them", show_number(*value))]
+    WeightTooLarge {
+        /// The value.
+        value: f64,
+    },
+    /// A scaling bound beyond [`read_limits::SCALING`].
+    #[error("a scaling bound is {}: beyond ±1e15 (read_limits::SCALING)", show_number(*value))]
+    ScalingTooLarge {
+        /// The value.
+        value: f64,
     },
 }
 
@@ -199,105 +391,11 @@ impl WeightsFile {
     }
 
     /// Checks sizes, finiteness, version and kind; returns the network behind its encoding.
-    pub fn network(&self) -> Result<EncodedNet, String> {
-        if self.format != FORMAT {
-            return Err(format!("format is '{}', expected '{FORMAT}'", self.format));
-        }
-        if !(1..=VERSION).contains(&self.version) {
-            return Err(format!("version {} is not supported (this build reads versions 1 to {VERSION})", self.version));
-        }
-        if self.version == 1 && self.encoding != InputEncoding::Raw {
-            return Err(format!("a version 1 file has raw inputs only, not the '{}' encoding", self.encoding.name()));
-        }
-        if self.version < 3 && (self.kind != NetKind::Unspecified || self.joint.is_some()) {
-            return Err(format!("a version {} file records no kind or joint (they came with version 3)", self.version));
-        }
-        if self.inputs.is_empty() {
-            return Err("empty network: 0 inputs".into());
-        }
-        match (self.kind, self.joint) {
-            (NetKind::Friction, None) => return Err("a friction net must name its joint (\"joint\": 1, 2, …)".into()),
-            (NetKind::Friction, Some(0)) => return Err("joint 0: joints are numbered from 1".into()),
-            (NetKind::Friction, Some(_)) if self.inputs.len() != 1 || self.outputs.len() != 1 => {
-                return Err(format!(
-                    "a friction net has 1 input (velocity) and 1 output (torque), not {} and {}",
-                    self.inputs.len(),
-                    self.outputs.len()
-                ))
-            }
-            (NetKind::Friction, Some(_)) if !matches!(self.encoding, InputEncoding::Raw | InputEncoding::LogSpeed) => {
-                return Err(format!(
-                    "a friction net takes the velocity raw or as '{}', not encoded as '{}'",
-                    InputEncoding::LogSpeed.name(),
-                    self.encoding.name()
-                ))
-            }
-            (NetKind::Gravity, _) if !self.encoding.is_of_angles() => {
-                return Err(format!("a gravity net takes angles, not speeds encoded as '{}'", self.encoding.name()))
-            }
-            (NetKind::Gravity, _) if self.inputs.len() != self.outputs.len() => {
-                return Err(format!(
-                    "a gravity net has one output per angle input, not {} inputs and {} outputs",
-                    self.inputs.len(),
-                    self.outputs.len()
-                ))
-            }
-            (NetKind::Gravity | NetKind::Unspecified, Some(j)) => {
-                return Err(format!("only a friction net names a joint; this {} names joint {j}", self.kind.name()))
-            }
-            _ => {}
-        }
-        let (n, h, k) = (self.encoding.features(self.inputs.len()), self.b1.len(), self.outputs.len());
-        if h == 0 || k == 0 {
-            return Err(format!("empty network: {h} hidden neurons, {k} outputs"));
-        }
-        if self.inputs.len() > read_limits::SIGNALS || k > read_limits::SIGNALS {
-            return Err(format!(
-                "{} inputs and {k} outputs: a net may have at most {} of each (read_limits::SIGNALS)",
-                self.inputs.len(),
-                read_limits::SIGNALS
-            ));
-        }
-        if h > read_limits::HIDDEN {
-            return Err(format!("{h} hidden neurons: a net may have at most {} (read_limits::HIDDEN)", read_limits::HIDDEN));
-        }
-        let weights = h * (n + 1) + k * (h + 1);
-        if weights > read_limits::WEIGHTS {
-            return Err(format!("{weights} weights and biases: a net may have at most {} (read_limits::WEIGHTS)", read_limits::WEIGHTS));
-        }
-        let shape = |name: &str, rows: &Vec<Vec<f64>>, r: usize, c: usize| -> Result<(), String> {
-            if rows.len() != r {
-                return Err(format!("{name} has {} rows, expected {r}", rows.len()));
-            }
-            match rows.iter().position(|row| row.len() != c) {
-                Some(i) => Err(format!("{name} row {i} has {} values, expected {c}", rows[i].len())),
-                None => Ok(()),
-            }
-        };
-        shape("iw", &self.iw, h, n)?;
-        shape("lw", &self.lw, k, h)?;
-        if self.b2.len() != k {
-            return Err(format!("b2 has {} values, expected {k}", self.b2.len()));
-        }
-        for (name, s, len) in [("input_scaling", &self.input_scaling, n), ("output_scaling", &self.output_scaling, k)] {
-            if s.min.len() != len || s.max.len() != len {
-                return Err(format!("{name} has {}/{} min/max values, expected {len}", s.min.len(), s.max.len()));
-            }
-            if let Some(i) = (0..len).find(|&i| !(s.min[i] <= s.max[i])) {
-                return Err(format!("{name} row {i}: min {} is not <= max {}", s.min[i], s.max[i]));
-            }
-        }
-        let all = self.iw.iter().flatten().chain(&self.b1).chain(self.lw.iter().flatten()).chain(&self.b2);
-        let scalings = [&self.input_scaling, &self.output_scaling].into_iter().flat_map(|s| s.min.iter().chain(&s.max));
-        if let Some(v) = all.clone().chain(scalings.clone()).find(|v| !v.is_finite()) {
-            return Err(format!("a weight or scaling value is {v}, not a finite number"));
-        }
-        if let Some(v) = all.copied().find(|v| !(v.abs() <= read_limits::WEIGHT)) {
-            return Err(format!("a weight or bias is {}: beyond ±1e8 (read_limits::WEIGHT) no trained net has them", show_number(v)));
-        }
-        if let Some(v) = scalings.copied().find(|v| !(v.abs() <= read_limits::SCALING)) {
-            return Err(format!("a scaling bound is {}: beyond ±1e15 (read_limits::SCALING)", show_number(v)));
-        }
+    pub fn network(&self) -> Result<EncodedNet, NetError> {
+        self.check_version()?;
+        self.check_kind()?;
+        let (n, h, k) = self.check_sizes()?;
+        self.check_values()?;
         let mlp = Mlp {
             iw: DMatrix::from_fn(h, n, |j, i| self.iw[j][i]),
             b1: DVector::from_column_slice(&self.b1),
@@ -309,23 +407,119 @@ impl WeightsFile {
         Ok(EncodedNet { encoding: self.encoding, mlp })
     }
 
+    /// The format, and the version with the fields it has.
+    fn check_version(&self) -> Result<(), NetError> {
+        if self.format != FORMAT {
+            return Err(NetError::Format { format: self.format.clone() });
+        }
+        if !(1..=VERSION).contains(&self.version) {
+            return Err(NetError::Version { version: self.version });
+        }
+        if self.version == 1 && self.encoding != InputEncoding::Raw {
+            return Err(NetError::EncodingBeforeVersion2 { encoding: self.encoding });
+        }
+        if self.version < 3 && (self.kind != NetKind::Unspecified || self.joint.is_some()) {
+            return Err(NetError::KindBeforeVersion3 { version: self.version });
+        }
+        Ok(())
+    }
+
+    /// Inputs there, and the signals, encoding and joint the kind asks for.
+    fn check_kind(&self) -> Result<(), NetError> {
+        if self.inputs.is_empty() {
+            return Err(NetError::NoInputs);
+        }
+        let (inputs, outputs) = (self.inputs.len(), self.outputs.len());
+        match (self.kind, self.joint) {
+            (NetKind::Friction, None) => Err(NetError::FrictionWithoutJoint),
+            (NetKind::Friction, Some(0)) => Err(NetError::JointZero),
+            (NetKind::Friction, Some(_)) if inputs != 1 || outputs != 1 => Err(NetError::FrictionSignals { inputs, outputs }),
+            (NetKind::Friction, Some(_)) if !matches!(self.encoding, InputEncoding::Raw | InputEncoding::LogSpeed) => {
+                Err(NetError::FrictionEncoding { encoding: self.encoding })
+            }
+            (NetKind::Gravity, _) if !self.encoding.is_of_angles() => Err(NetError::GravityEncoding { encoding: self.encoding }),
+            (NetKind::Gravity, _) if inputs != outputs => Err(NetError::GravitySignals { inputs, outputs }),
+            (NetKind::Gravity | NetKind::Unspecified, Some(joint)) => Err(NetError::JointOfOtherKind { kind: self.kind, joint }),
+            _ => Ok(()),
+        }
+    }
+
+    /// The net's sizes (N encoded inputs, H hidden neurons, K outputs) within
+    /// [`read_limits`], and every layer and scaling of them.
+    fn check_sizes(&self) -> Result<(usize, usize, usize), NetError> {
+        let (n, h, k) = (self.encoding.features(self.inputs.len()), self.b1.len(), self.outputs.len());
+        if h == 0 || k == 0 {
+            return Err(NetError::Empty { hidden: h, outputs: k });
+        }
+        if self.inputs.len() > read_limits::SIGNALS || k > read_limits::SIGNALS {
+            return Err(NetError::TooManySignals { inputs: self.inputs.len(), outputs: k });
+        }
+        if h > read_limits::HIDDEN {
+            return Err(NetError::TooManyHidden { hidden: h });
+        }
+        let weights = h * (n + 1) + k * (h + 1);
+        if weights > read_limits::WEIGHTS {
+            return Err(NetError::TooManyWeights { weights });
+        }
+        check_shape("iw", &self.iw, h, n)?;
+        check_shape("lw", &self.lw, k, h)?;
+        if self.b2.len() != k {
+            return Err(NetError::OutputBiases { values: self.b2.len(), expected: k });
+        }
+        for (scaling, s, len) in [("input_scaling", &self.input_scaling, n), ("output_scaling", &self.output_scaling, k)] {
+            if s.min.len() != len || s.max.len() != len {
+                return Err(NetError::ScalingLength { scaling, min: s.min.len(), max: s.max.len(), expected: len });
+            }
+            if let Some(row) = (0..len).find(|&i| !(s.min[i] <= s.max[i])) {
+                return Err(NetError::ScalingOrder { scaling, row, min: s.min[row], max: s.max[row] });
+            }
+        }
+        Ok((n, h, k))
+    }
+
+    /// Every weight, bias and scaling bound finite and within [`read_limits`].
+    fn check_values(&self) -> Result<(), NetError> {
+        let all = self.iw.iter().flatten().chain(&self.b1).chain(self.lw.iter().flatten()).chain(&self.b2);
+        let scalings = [&self.input_scaling, &self.output_scaling].into_iter().flat_map(|s| s.min.iter().chain(&s.max));
+        if let Some(&value) = all.clone().chain(scalings.clone()).find(|v| !v.is_finite()) {
+            return Err(NetError::NotFinite { value });
+        }
+        if let Some(value) = all.copied().find(|v| !(v.abs() <= read_limits::WEIGHT)) {
+            return Err(NetError::WeightTooLarge { value });
+        }
+        if let Some(value) = scalings.copied().find(|v| !(v.abs() <= read_limits::SCALING)) {
+            return Err(NetError::ScalingTooLarge { value });
+        }
+        Ok(())
+    }
+
     /// Parses JSON text; `path` names the source in messages.
     pub fn from_json(text: &str, path: &str) -> Result<Self, WeightsError> {
-        let file: Self = serde_json::from_str(text).map_err(|e| WeightsError::Invalid { path: path.into(), message: e.to_string() })?;
-        file.network().map_err(|message| WeightsError::Invalid { path: path.into(), message })?;
+        let file: Self = serde_json::from_str(text).map_err(|error| WeightsError::Parse { path: path.into(), error })?;
+        file.network().map_err(|error| WeightsError::Invalid { path: path.into(), error })?;
         Ok(file)
     }
 
     /// Reads and checks a weights file.
     pub fn read(path: &Path) -> Result<Self, WeightsError> {
         let shown = path.display().to_string();
-        let text =
-            read_text(path, read_limits::FILE_BYTES).map_err(|e| WeightsError::Io { path: shown.clone(), message: e.to_string() })?;
+        let text = read_text(path, read_limits::FILE_BYTES).map_err(|error| WeightsError::Io { path: shown.clone(), error })?;
         Self::from_json(&text, &shown)
     }
 
     /// The file as pretty JSON; floats round-trip exactly.
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("weights serialise to JSON")
+    }
+}
+
+/// Checks that the weight matrix `layer` (rows of values) has `rows` rows of `columns` values.
+fn check_shape(layer: &'static str, matrix: &[Vec<f64>], rows: usize, columns: usize) -> Result<(), NetError> {
+    if matrix.len() != rows {
+        return Err(NetError::Rows { layer, rows: matrix.len(), expected: rows });
+    }
+    match matrix.iter().position(|row| row.len() != columns) {
+        Some(row) => Err(NetError::RowLength { layer, row, values: matrix[row].len(), expected: columns }),
+        None => Ok(()),
     }
 }

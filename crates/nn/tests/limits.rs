@@ -35,15 +35,15 @@ fn weights_beyond_what_a_trained_net_holds_are_refused() {
     assert!(e.contains("big.json: a weight or bias is 1.7e308: beyond ±1e8"), "{e}");
     let mut big = weights(3);
     big.b1[2] = -2e8;
-    assert!(big.network().unwrap_err().contains("a weight or bias is -200000000"));
+    assert!(big.network().unwrap_err().to_string().contains("a weight or bias is -200000000"));
     let mut wide = weights(3);
     wide.output_scaling.max[0] = 1e300;
-    assert!(wide.network().unwrap_err().contains("a scaling bound is 1e300: beyond ±1e15"));
-    let e = weights(read_limits::HIDDEN + 1).network().unwrap_err();
+    assert!(wide.network().unwrap_err().to_string().contains("a scaling bound is 1e300: beyond ±1e15"));
+    let e = weights(read_limits::HIDDEN + 1).network().unwrap_err().to_string();
     assert!(e.contains("10001 hidden neurons: a net may have at most 10000"), "{e}");
     let mut many = weights(2);
     many.inputs = (0..=read_limits::SIGNALS).map(|i| Signal { name: format!("x{i}"), unit: String::new() }).collect();
-    assert!(many.network().unwrap_err().contains("1025 inputs"));
+    assert!(many.network().unwrap_err().to_string().contains("1025 inputs"));
     // A net at the limits is read and evaluates to finite numbers in its range.
     let mut edge = weights(3);
     edge.lw[0][1] = 1e8;
