@@ -37,7 +37,7 @@ const CHOLESKY_PIECE: usize = 128;
 /// upper triangle read) into the upper triangle of `u` (its lower triangle is left
 /// meaningless). Returns false if A + shift·I is not numerically positive definite.
 ///
-/// Left-looking by block rows of [`CHOLESKY_BLOCK`]: block row K is A's rows minus
+/// Left-looking by block rows of `CHOLESKY_BLOCK` (32): block row K is A's rows minus
 /// U[..K, K]ᵀ U[..K, K..], one GEMM over all finished rows (matrixmultiply, so it runs at
 /// GEMM speed rather than at the axpy speed of an unblocked factorisation), then the block's
 /// own triangle is factored and its columns right of it solved. The column pieces of each

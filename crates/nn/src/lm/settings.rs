@@ -145,12 +145,12 @@ pub enum TrainError {
     Settings(String),
 }
 
-/// Largest number of hidden neurons [`train`] accepts.
+/// Largest number of hidden neurons [`train`](super::train) accepts.
 pub const MAX_HIDDEN: usize = 1000;
-/// Largest number of weights and biases [`train`] accepts: Levenberg–Marquardt factors a
+/// Largest number of weights and biases [`train`](super::train) accepts: Levenberg–Marquardt factors a
 /// square matrix of this order every step (5000: three 200 MB matrices, seconds per step).
 pub const MAX_WEIGHTS: usize = 5000;
-/// Largest working memory [`train`] allocates [bytes] (8 GiB).
+/// Largest working memory [`train`](super::train) allocates [bytes] (8 GiB).
 pub const MAX_WORKSPACE_BYTES: usize = 8 << 30;
 /// Fewest samples of the training part.
 pub const MIN_TRAINING_SAMPLES: usize = 10;
