@@ -41,6 +41,7 @@ pub struct SharedSlice<'a> {
 // SAFETY: a SharedSlice is only a &mut [f64] whose parts are handed out by `part`, whose
 // callers promise that no two live parts overlap.
 unsafe impl Send for SharedSlice<'_> {}
+// SAFETY: as for Send: threads that share it touch disjoint parts only (`part`, `view`).
 unsafe impl Sync for SharedSlice<'_> {}
 
 impl<'a> SharedSlice<'a> {
