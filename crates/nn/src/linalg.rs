@@ -45,60 +45,102 @@ const CHOLESKY_PIECE: usize = 128;
 /// thread runs it, so the factor does not depend on `par`.
 pub fn cholesky_shifted(a: &[f64], shift: f64, u: &mut [f64], m: usize, par: &dyn ParallelFor) -> bool {
     assert!(a.len() >= m * m && u.len() >= m * m);
-    let shared = SharedSlice::new(&mut u[..m * m]);
+    let u = SharedSlice::new(&mut u[..m * m]);
     for k0 in (0..m).step_by(CHOLESKY_BLOCK) {
-        let k1 = (k0 + CHOLESKY_BLOCK).min(m);
-        let nb = k1 - k0;
-        // Rows k0..k1, columns c0..c1: copied from A, shifted on the diagonal, minus the
-        // finished rows' contribution.
-        let update = |c0: usize, c1: usize| {
-            for r in k0..k1 {
-                let lo = c0.max(r);
-                // SAFETY: rows k0..k1, columns c0..c1 belong to this task alone; rows < k0
-                // are only read.
-                let row = unsafe { shared.part(r * m + lo, c1 - lo) };
-                row.copy_from_slice(&a[r * m + lo..r * m + c1]);
-                if lo == r {
-                    row[0] += shift;
-                }
-            }
-            if k0 > 0 {
-                let base = shared.as_ptr();
-                // SAFETY: A = U[0..k0, k0..k1]ᵀ and B = U[0..k0, c0..c1] are finished rows
-                // (read only); C = rows k0..k1, columns c0..c1 is this task's. The elements of
-                // C below the diagonal are written but never read.
-                unsafe {
-                    matrixmultiply::dgemm(
-                        nb,
-                        k0,
-                        c1 - c0,
-                        -1.0,
-                        base.add(k0),
-                        1,
-                        m as isize,
-                        base.add(c0),
-                        m as isize,
-                        1,
-                        1.0,
-                        base.add(k0 * m + c0),
-                        m as isize,
-                        1,
-                    );
-                }
-            }
-        };
+        let rows = BlockRow { a, shift, u, m, k0, k1: (k0 + CHOLESKY_BLOCK).min(m) };
         // The diagonal block first: the pieces right of it are solved with it.
-        update(k0, k1);
+        // SAFETY: no task is running; rows < k0 are final.
+        if !unsafe { rows.factor_diagonal() } {
+            return false;
+        }
+        let pieces = (m - rows.k1).div_ceil(CHOLESKY_PIECE);
+        par.run(pieces, &|t| {
+            let c0 = rows.k1 + t * CHOLESKY_PIECE;
+            let c1 = (c0 + CHOLESKY_PIECE).min(m);
+            // SAFETY: columns c0..c1 of the block row are this task's alone; the diagonal
+            // block and rows < k0 are final and only read.
+            unsafe { rows.solve_piece(c0, c1) };
+        });
+    }
+    true
+}
+
+/// Block row k0..k1 of [`cholesky_shifted`]: A + shift·I into the factor `u` (row-major m×m),
+/// whose rows < k0 are final.
+#[derive(Clone, Copy)]
+struct BlockRow<'a> {
+    a: &'a [f64],
+    shift: f64,
+    u: SharedSlice<'a>,
+    m: usize,
+    k0: usize,
+    k1: usize,
+}
+
+impl BlockRow<'_> {
+    /// Rows k0..k1, columns c0..c1 of U before their own block's elimination: copied from A,
+    /// shifted on the diagonal, minus the finished rows' contribution (one GEMM).
+    ///
+    /// # Safety
+    /// No other live reference may touch rows k0..k1, columns c0..c1 of `u`, nor write rows
+    /// < k0.
+    unsafe fn update(&self, c0: usize, c1: usize) {
+        let (a, m, k0, k1) = (self.a, self.m, self.k0, self.k1);
+        for r in k0..k1 {
+            let lo = c0.max(r);
+            // SAFETY: rows k0..k1, columns c0..c1 belong to this call alone (the caller's
+            // promise); rows < k0 are only read.
+            let row = unsafe { self.u.part(r * m + lo, c1 - lo) };
+            row.copy_from_slice(&a[r * m + lo..r * m + c1]);
+            if lo == r {
+                row[0] += self.shift;
+            }
+        }
+        if k0 > 0 {
+            let base = self.u.as_ptr();
+            // SAFETY: A = U[0..k0, k0..k1]ᵀ and B = U[0..k0, c0..c1] are finished rows
+            // (read only); C = rows k0..k1, columns c0..c1 is this call's. The elements of
+            // C below the diagonal are written but never read.
+            unsafe {
+                matrixmultiply::dgemm(
+                    k1 - k0,
+                    k0,
+                    c1 - c0,
+                    -1.0,
+                    base.add(k0),
+                    1,
+                    m as isize,
+                    base.add(c0),
+                    m as isize,
+                    1,
+                    1.0,
+                    base.add(k0 * m + c0),
+                    m as isize,
+                    1,
+                );
+            }
+        }
+    }
+
+    /// Updates and factors the diagonal block (rows and columns k0..k1); false if it is not
+    /// numerically positive definite.
+    ///
+    /// # Safety
+    /// No other live reference may touch rows k0..k1 of `u`, nor write rows < k0.
+    unsafe fn factor_diagonal(&self) -> bool {
+        let (m, k0, k1) = (self.m, self.k0, self.k1);
+        // SAFETY: the caller's promise covers columns k0..k1 of rows k0..k1.
+        unsafe { self.update(k0, k1) };
         for i in k0..k1 {
-            // SAFETY: no task is running; rows k0..k1 of the diagonal block are ours.
-            let d = unsafe { shared.part(i * m + i, 1) }[0];
+            // SAFETY: rows k0..k1 of the diagonal block are ours (the caller's promise).
+            let d = unsafe { self.u.part(i * m + i, 1) }[0];
             if !(d > 0.0 && d.is_finite()) {
                 return false;
             }
             let pivot = d.sqrt();
             // SAFETY: as above; the row part k0..k1 of row i and, below, of rows r > i are
             // disjoint.
-            let row_i = unsafe { shared.part(i * m + i, k1 - i) };
+            let row_i = unsafe { self.u.part(i * m + i, k1 - i) };
             row_i[0] = pivot;
             let inv = 1.0 / pivot;
             for v in &mut row_i[1..] {
@@ -107,40 +149,45 @@ pub fn cholesky_shifted(a: &[f64], shift: f64, u: &mut [f64], m: usize, par: &dy
             for r in i + 1..k1 {
                 let f = row_i[r - i];
                 // SAFETY: row r's part r..k1 overlaps no part of row i.
-                let row_r = unsafe { shared.part(r * m + r, k1 - r) };
+                let row_r = unsafe { self.u.part(r * m + r, k1 - r) };
                 for (x, v) in row_r.iter_mut().zip(&row_i[r - i..]) {
                     *x -= f * v;
                 }
             }
         }
-        let pieces = (m - k1).div_ceil(CHOLESKY_PIECE);
-        par.run(pieces, &|t| {
-            let c0 = k1 + t * CHOLESKY_PIECE;
-            let c1 = (c0 + CHOLESKY_PIECE).min(m);
-            update(c0, c1);
-            // Uᵀ_KK X = C by rows: row i of X is final once the rows above are subtracted.
-            for i in k0..k1 {
-                // SAFETY: the diagonal block is finished (read only); columns c0..c1 of rows
-                // k0..k1 are this task's, and rows i and r below are different rows.
-                let (diag, row_i) = unsafe { (shared.view(i * m + i, k1 - i), shared.part(i * m + c0, c1 - c0)) };
-                let inv = 1.0 / diag[0];
-                for v in row_i.iter_mut() {
-                    *v *= inv;
-                }
-                for r in i + 1..k1 {
-                    let f = diag[r - i];
-                    if f != 0.0 {
-                        // SAFETY: as above.
-                        let row_r = unsafe { shared.part(r * m + c0, c1 - c0) };
-                        for (x, v) in row_r.iter_mut().zip(row_i.iter()) {
-                            *x -= f * v;
-                        }
+        true
+    }
+
+    /// Updates columns c0..c1 of the block row and solves them with the factored diagonal
+    /// block: Uᵀ_KK X = C by rows, row i of X final once the rows above are subtracted.
+    ///
+    /// # Safety
+    /// No other live reference may touch rows k0..k1, columns c0..c1 of `u`, nor write the
+    /// diagonal block or rows < k0, which must be final.
+    unsafe fn solve_piece(&self, c0: usize, c1: usize) {
+        let (m, k0, k1) = (self.m, self.k0, self.k1);
+        // SAFETY: the caller's promise.
+        unsafe { self.update(c0, c1) };
+        for i in k0..k1 {
+            // SAFETY: the diagonal block is finished (read only); columns c0..c1 of rows
+            // k0..k1 are this call's, and rows i and r below are different rows.
+            let (diag, row_i) = unsafe { (self.u.view(i * m + i, k1 - i), self.u.part(i * m + c0, c1 - c0)) };
+            let inv = 1.0 / diag[0];
+            for v in row_i.iter_mut() {
+                *v *= inv;
+            }
+            for r in i + 1..k1 {
+                let f = diag[r - i];
+                if f != 0.0 {
+                    // SAFETY: as above.
+                    let row_r = unsafe { self.u.part(r * m + c0, c1 - c0) };
+                    for (x, v) in row_r.iter_mut().zip(row_i.iter()) {
+                        *x -= f * v;
                     }
                 }
             }
-        });
+        }
     }
-    true
 }
 
 /// The number of GEMM calls [`cholesky_shifted`] makes for an m×m matrix (matrixmultiply
