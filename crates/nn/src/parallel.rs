@@ -8,7 +8,7 @@
 
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::{Condvar, Mutex, MutexGuard};
+use std::sync::{Condvar, Mutex, MutexGuard, TryLockError};
 
 /// Runs numbered tasks, possibly on several threads. The trainer and its linear algebra hand
 /// out tasks that write disjoint parts of one buffer, so how they are spread over threads
@@ -131,7 +131,12 @@ fn pause(spins: u32) {
 /// instead spin briefly (≈ 0.1–0.3 ms), then sleep, between parts. The calling thread works
 /// too: a pool of `threads` threads has `threads − 1` workers, and with none it runs every
 /// task itself. Tasks are taken in increasing order, each by the first thread free.
+///
+/// One job runs at a time: a [`ParallelFor::run`] called while another is in flight (by one of
+/// its tasks, or by another thread) runs its own tasks on its calling thread.
 pub struct Pool {
+    /// Held by the caller whose job is in flight.
+    caller: Mutex<()>,
     state: Mutex<State>,
     wake: Condvar,
     idle: Condvar,
@@ -147,6 +152,7 @@ impl Pool {
     /// which must call [`Pool::serve`] until [`Pool::shutdown`] ([`Pool::scoped`] does both).
     pub fn new(threads: usize) -> Self {
         Self {
+            caller: Mutex::new(()),
             state: Mutex::new(State { generation: 0, job: None, busy: 0, shutdown: false }),
             wake: Condvar::new(),
             idle: Condvar::new(),
@@ -270,6 +276,16 @@ impl ParallelFor for Pool {
             (0..tasks).for_each(task);
             return;
         }
+        // The job in flight and its task counter are the pool's alone: a second caller would
+        // reset the counter under the first one's tasks.
+        let _caller = match self.caller.try_lock() {
+            Ok(guard) => guard,
+            Err(TryLockError::Poisoned(poisoned)) => poisoned.into_inner(),
+            Err(TryLockError::WouldBlock) => {
+                (0..tasks).for_each(task);
+                return;
+            }
+        };
         let task: *const Task<'_> = task;
         // SAFETY: only the lifetime is erased. Workers take the job under the lock and are
         // counted in `busy`; `Withdraw` removes it under the lock once `busy` is 0, before
@@ -287,5 +303,40 @@ impl ParallelFor for Pool {
         let _withdraw = Withdraw(self);
         // SAFETY: the pointer was made from a reference alive for this whole call.
         self.claim(unsafe { &*task }, tasks);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every task of `tasks` runs once: counts per task.
+    fn counts(par: &dyn ParallelFor, tasks: usize) -> Vec<usize> {
+        let hits: Vec<AtomicUsize> = (0..tasks).map(|_| AtomicUsize::new(0)).collect();
+        par.run(tasks, &|i| {
+            hits[i].fetch_add(1, Ordering::Relaxed);
+        });
+        hits.into_iter().map(AtomicUsize::into_inner).collect()
+    }
+
+    #[test]
+    fn every_task_runs_once_also_when_tasks_and_threads_call_the_pool_again() {
+        Pool::scoped(3, |pool| {
+            assert_eq!(pool.workers(), 2);
+            assert_eq!(counts(pool, 1000), vec![1; 1000]);
+            // A task that runs a job of its own on the same pool, and two threads at once.
+            let inner: Vec<AtomicUsize> = (0..50).map(|_| AtomicUsize::new(0)).collect();
+            pool.run(50, &|i| {
+                assert_eq!(counts(pool, 7), vec![1; 7]);
+                inner[i].fetch_add(1, Ordering::Relaxed);
+            });
+            assert!(inner.iter().all(|c| c.load(Ordering::Relaxed) == 1));
+            std::thread::scope(|s| {
+                let other = s.spawn(|| (0..200).all(|_| counts(pool, 64) == vec![1; 64]));
+                assert!((0..200).all(|_| counts(pool, 64) == vec![1; 64]));
+                assert!(other.join().unwrap());
+            });
+        });
+        assert_eq!(counts(&Serial, 5), vec![1; 5]);
     }
 }
