@@ -30,12 +30,12 @@ use neurarm::experiments::{build_fmus, tracking_start, tracking_system, Arms, Se
 use neurarm::export::export_fmu;
 use neurarm_cosim::System;
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
+use neurarm_nn::{train, EncodedNet, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::arm::{end_effector_position, end_effector_state, ArmParams, ArmSimulator, ArmState, JointFriction, Sensors};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{
     scaled_reference, task_space_torque_into, ReferencePlacement, TaskReference, TaskSpaceData, TaskSpaceGains,
 };
-use neurarm_physics::nn::{train, EncodedNet, Signal, TrainSettings, WeightsFile};
 
 const STEP: f64 = 1e-3;
 

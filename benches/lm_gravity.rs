@@ -18,11 +18,12 @@ use std::path::Path;
 use std::time::Instant;
 
 use nalgebra::DMatrix;
+use neurarm_nn::linalg::measure_gemm_gflops;
+use neurarm_nn::lm::{split, train_with_threads, Damping};
+use neurarm_nn::parallel::default_threads;
+use neurarm_nn::{MinMaxScaling, Mlp, TrainSettings};
 use neurarm_physics::arm::{gravity_torques, ArmParams};
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::linalg::measure_gemm_gflops;
-use neurarm_physics::nn::lm::{default_threads, split, train_with_threads, Damping};
-use neurarm_physics::nn::{MinMaxScaling, Mlp, TrainSettings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;

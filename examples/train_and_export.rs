@@ -11,8 +11,8 @@ use nalgebra::DMatrix;
 use neurarm::export::export_fmu;
 use neurarm::table::{write_atomic, write_text_atomic, NumericTable};
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec};
+use neurarm_nn::{train, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::nn::{train, Signal, TrainSettings, WeightsFile};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scratch = tempfile::tempdir()?;

@@ -1,17 +1,19 @@
-//! Hashes the sources this binary is built from (its own, the models', the physics', the export
-//! layer's and Cargo.lock) into `NEURARM_FMU_SOURCES`, which the library carries as a marker:
+//! Hashes the sources this binary is built from (its own, the models', the physics', the nets',
+//! the export layer's and Cargo.lock) into `NEURARM_FMU_SOURCES`, which the library carries as a marker:
 //! neurarm packs a cross build for another platform only if it carries the same hash as the
 //! linux64 library, so an FMU never ships binaries of different sources (a file's age cannot
 //! tell: cargo relinks a library whenever the features it is built with change).
 
 use std::path::{Path, PathBuf};
 
-const SOURCES: [&str; 9] = [
+const SOURCES: [&str; 11] = [
     "fmu/src",
     "crates/models/src",
     "crates/models/Cargo.toml",
     "crates/physics/src",
     "crates/physics/Cargo.toml",
+    "crates/nn/src",
+    "crates/nn/Cargo.toml",
     "crates/fmi-export/src",
     "crates/fmi-export/Cargo.toml",
     "fmu/Cargo.toml",

@@ -14,8 +14,8 @@ use crate::identify::{
 };
 use crate::table::{header_cell, write_atomic, write_text_atomic, NumericTable};
 use neurarm_models::{FmuSpec, ModelSpec, NnCompensatorSpec};
+use neurarm_nn::{EpochInfo, InputEncoding};
 use neurarm_physics::arm::ArmParams;
-use neurarm_physics::nn::{EpochInfo, InputEncoding};
 
 /// Writes joint `joint`'s (1-based) friction pairs: `qd_J [rad/s]`, `tau_friction_J [N.m]`,
 /// `samples`, and, when `path` is a file, the identification's verdicts as JSON beside them
@@ -249,7 +249,7 @@ struct Written {
 
 impl Written {
     /// Writes the net `net` to `name` in `work`, as a source of the FMU.
-    fn net(&mut self, work: &Path, name: &str, net: &neurarm_physics::nn::WeightsFile) -> Result<()> {
+    fn net(&mut self, work: &Path, name: &str, net: &neurarm_nn::WeightsFile) -> Result<()> {
         let path = work.join(name);
         write_text_atomic(&path, &net.to_json()).with_context(|| format!("writing {}", path.display()))?;
         self.files.push(path.clone());

@@ -206,7 +206,7 @@ fn train_and_eval_round_trip_and_report_bad_data() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let weights = neurarm_physics::nn::WeightsFile::read(&net).unwrap();
+    let weights = neurarm_nn::WeightsFile::read(&net).unwrap();
     assert_eq!(weights.inputs[0].unit, "rad/s");
     assert_eq!(weights.outputs[0].unit, "N.m");
     // eval writes the library's forward pass.
@@ -228,8 +228,8 @@ fn train_and_eval_round_trip_and_report_bad_data() {
         .arg(&nielsen)
         .assert()
         .success();
-    let w = neurarm_physics::nn::WeightsFile::read(&nielsen).unwrap();
-    assert_eq!(w.training.damping, neurarm_physics::nn::lm::Damping::Nielsen);
+    let w = neurarm_nn::WeightsFile::read(&nielsen).unwrap();
+    assert_eq!(w.training.damping, neurarm_nn::lm::Damping::Nielsen);
     assert!(w.report.train_mse < 1e-3, "Nielsen's rule trains: MSE {}", w.report.train_mse);
     let o = neurarm()
         .args(["train", "-d"])

@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use assert_cmd::Command;
 use neurarm::experiments::friction::friction_net_error;
 use neurarm::table::NumericTable;
+use neurarm_nn::WeightsFile;
 use neurarm_physics::arm::gravity_torques;
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::nn::WeightsFile;
 
 fn neurarm() -> Command {
     Command::cargo_bin("neurarm").unwrap()

@@ -156,7 +156,7 @@ fn dash_writes_to_standard_output() {
     assert!(o.status.success(), "{}", stderr_of(&o));
     let net = d.join("net.json");
     std::fs::write(&net, &o.stdout).unwrap();
-    assert!(neurarm_physics::nn::WeightsFile::read(&net).is_ok(), "the JSON on standard output is a weights file");
+    assert!(neurarm_nn::WeightsFile::read(&net).is_ok(), "the JSON on standard output is a weights file");
     let o = neurarm().current_dir(d).args(["eval", "-n", "net.json", "-d"]).arg(&pairs).args(["-o", "-"]).output().unwrap();
     assert!(o.status.success(), "{}", stderr_of(&o));
     let text = String::from_utf8(o.stdout.clone()).unwrap();

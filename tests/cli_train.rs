@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
-use neurarm_physics::nn::{NetKind, WeightsFile};
+use neurarm_nn::{NetKind, WeightsFile};
 
 fn neurarm() -> Command {
     Command::cargo_bin("neurarm").unwrap()

@@ -213,7 +213,7 @@ fn the_quick_paper_run_holds_for_a_three_and_a_six_joint_arm() {
 #[test]
 fn the_full_gravity_identification_is_within_one_percent() {
     use neurarm::experiments::{build_fmus, gravity_grid, gravity_net_errors, gravity_sweep, parallel, train_gravity_net};
-    use neurarm_physics::nn::InputEncoding;
+    use neurarm_nn::InputEncoding;
     let dir = tempfile::tempdir().unwrap();
     let settings = Settings { threads: 2, ..Settings::paper() };
     let arms = Arms::builtin();

@@ -84,9 +84,9 @@ fn guid_changes_with_any_start_value() {
 }
 
 /// Fixed, formula-made weights (no training, so the file is the same on every machine).
-fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) -> neurarm_physics::nn::WeightsFile {
+fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) -> neurarm_nn::WeightsFile {
     use nalgebra::{DMatrix, DVector};
-    use neurarm_physics::nn::{MinMaxScaling, Mlp, Signal, TrainReport, TrainSettings, WeightsFile};
+    use neurarm_nn::{MinMaxScaling, Mlp, Signal, TrainReport, TrainSettings, WeightsFile};
     // Exact binary fractions: the same bits on every machine, whatever its libm.
     let f = |a: usize, b: usize, c: f64| ((a * 7 + b * 3) % 11) as f64 / 8.0 - 0.625 + c;
     let net = Mlp {
@@ -101,7 +101,7 @@ fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) 
     let report = TrainReport {
         epochs: 0,
         best_epoch: 0,
-        stop_reason: neurarm_physics::nn::StopReason::Epochs,
+        stop_reason: neurarm_nn::StopReason::Epochs,
         restart: 0,
         train_mse: 0.0,
         validation_mse: None,
@@ -114,7 +114,7 @@ fn fixed_weights(n_in: usize, hidden: usize, n_out: usize, names: (&str, &str)) 
 
 /// The friction net of `joint`: the fixed weights, shifted by a binary fraction per joint (the
 /// compensator refuses one net given for two joints), named and marked for that joint.
-fn fixed_friction(joint: usize) -> neurarm_physics::nn::WeightsFile {
+fn fixed_friction(joint: usize) -> neurarm_nn::WeightsFile {
     let mut file = fixed_weights(1, 3, 1, ("qd", "tau_friction")).friction_of_joint(joint);
     file.b2[0] += 0.125 * joint as f64;
     file.inputs[0].name = format!("qd_{joint}");
@@ -153,9 +153,9 @@ fn nn_compensator_model_description_has_not_drifted() {
 #[test]
 fn nn_compensator_checks_the_encodings_of_its_nets() {
     use neurarm_models::{ModelSpec, NnCompensatorSpec};
-    use neurarm_physics::nn::InputEncoding;
+    use neurarm_nn::InputEncoding;
     let dir = tempfile::tempdir().unwrap();
-    let build = |friction: &neurarm_physics::nn::WeightsFile, gravity: &neurarm_physics::nn::WeightsFile| {
+    let build = |friction: &neurarm_nn::WeightsFile, gravity: &neurarm_nn::WeightsFile| {
         std::fs::write(dir.path().join("friction_1.json"), friction.to_json()).unwrap();
         std::fs::write(dir.path().join("friction_2.json"), fixed_friction(2).to_json()).unwrap();
         std::fs::write(dir.path().join("gravity.json"), gravity.to_json()).unwrap();
@@ -173,14 +173,14 @@ fn nn_compensator_checks_the_encodings_of_its_nets() {
     };
     let friction = fixed_friction(1);
     let periodic_gravity = fixed_weights(4, 5, 2, ("q", "tau"));
-    let periodic_gravity = neurarm_physics::nn::WeightsFile {
+    let periodic_gravity = neurarm_nn::WeightsFile {
         inputs: periodic_gravity.inputs[..2].to_vec(),
         ..periodic_gravity.with_encoding(InputEncoding::LinkAngles)
     };
     build(&friction, &periodic_gravity).unwrap();
     let two = fixed_weights(2, 3, 1, ("qd", "tau"));
     let angle_friction =
-        neurarm_physics::nn::WeightsFile { inputs: two.inputs[..1].to_vec(), ..two.clone().with_encoding(InputEncoding::JointAngles) };
+        neurarm_nn::WeightsFile { inputs: two.inputs[..1].to_vec(), ..two.clone().with_encoding(InputEncoding::JointAngles) };
     let e = build(&angle_friction, &periodic_gravity).unwrap_err();
     assert!(e.contains("friction net of joint 1") && e.contains("joint_angles"), "{e}");
     let raw_shaped = fixed_weights(2, 5, 2, ("q", "tau")).with_encoding(InputEncoding::LinkAngles);

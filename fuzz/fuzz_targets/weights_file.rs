@@ -5,7 +5,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use neurarm_physics::nn::{InputEncoding, WeightsFile};
+use neurarm_nn::{InputEncoding, WeightsFile};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };

@@ -23,7 +23,7 @@ use neurarm_models::*;
 use neurarm_physics::arm::{ArmParams, FrictionBranch, JointFriction};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::TaskSpaceGains;
-use neurarm_physics::nn::{InputEncoding, MinMaxScaling, Mlp, NetKind, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
+use neurarm_nn::{InputEncoding, MinMaxScaling, Mlp, NetKind, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
 
 // The FMU crate is linked for its exported symbols, declared here as a host sees them.
 use neurarm_fmu as _;

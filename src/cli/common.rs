@@ -10,9 +10,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use neurarm::output::describe;
 use neurarm::table::write_text_atomic;
+use neurarm_nn::InputEncoding;
 use neurarm_physics::arm::ArmState;
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::nn::InputEncoding;
 
 /// Which arm, and from which state: shared by the commands that simulate or export one.
 #[derive(Args)]
@@ -124,7 +124,7 @@ impl EpochBar {
     }
 
     /// Shows one epoch (errors in scaled units, as the trainer sees them).
-    pub fn show(&self, e: &neurarm_physics::nn::EpochInfo<'_>) {
+    pub fn show(&self, e: &neurarm_nn::EpochInfo<'_>) {
         self.bar.set_prefix((e.restart + 1).to_string());
         if self.epochs > 0 {
             self.bar.set_position((e.restart * self.epochs + e.epoch) as u64);
@@ -151,8 +151,7 @@ impl EpochBar {
 
 /// Parses a net's input encoding for clap.
 pub fn parse_encoding(text: &str) -> Result<InputEncoding> {
-    // `InputEncoding::parse` says what is wrong in words.
-    InputEncoding::parse(text).map_err(anyhow::Error::msg)
+    Ok(InputEncoding::parse(text)?)
 }
 
 /// Parses a gravity net's input encoding (one of angles) for clap.

@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use neurarm::output::describe;
 use neurarm::table::{write_atomic, NumericTable};
-use neurarm_physics::nn::WeightsFile;
+use neurarm_nn::WeightsFile;
 
 /// The arguments of `neurarm eval`. Its help text is the doc of `Command::Eval` in
 /// main.rs, which clap shows instead of this one.

@@ -10,8 +10,8 @@ use neurarm::export::{export_fmi3_twin, export_fmu_as, FmiVersion};
 use neurarm_models::{
     AdaptationLaw, FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
 };
+use neurarm_nn::{NetKind, WeightsFile};
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
-use neurarm_physics::nn::{NetKind, WeightsFile};
 
 use super::common::{identifier_for, load_config, ArmSource, PlatformArgs};
 

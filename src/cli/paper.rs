@@ -10,9 +10,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use neurarm::experiments::paper::{compute, PaperRun, Table1};
 use neurarm::experiments::{Arms, GravityDesign, Progress, Settings};
+use neurarm_nn::InputEncoding;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
-use neurarm_physics::nn::InputEncoding;
 
 use super::common::{load_config, parse_angle_encoding, PlatformArgs};
 

@@ -8,8 +8,8 @@ use clap::Args;
 use nalgebra::DMatrix;
 use neurarm::output::describe;
 use neurarm::table::{write_text_atomic, NumericTable};
-use neurarm_physics::nn::lm::Damping;
-use neurarm_physics::nn::{train, InputEncoding, NetKind, Signal, TrainSettings, WeightsFile};
+use neurarm_nn::lm::Damping;
+use neurarm_nn::{train, InputEncoding, NetKind, Signal, TrainSettings, WeightsFile};
 
 use super::common::{parse_encoding, EpochBar};
 
@@ -136,13 +136,13 @@ fn train_from_csv(
         DMatrix::from_fn(names.len(), table.rows(), |r, c| cols[r][c])
     };
     let raw = matrix(inputs);
-    neurarm_physics::nn::lm::check_settings(&settings, encoding.features(inputs.len()), targets.len(), table.rows())
+    neurarm_nn::lm::check_settings(&settings, encoding.features(inputs.len()), targets.len(), table.rows())
         .with_context(|| data.display().to_string())?;
-    if let Some(warning) = neurarm_physics::nn::lm::time_series_warning(&raw) {
+    if let Some(warning) = neurarm_nn::lm::time_series_warning(&raw) {
         eprintln!("warning: {}: {warning}", data.display());
     }
-    let weights = neurarm_physics::nn::lm::weight_count(encoding.features(inputs.len()), settings.hidden, targets.len()).unwrap_or(0);
-    let training_values = neurarm_physics::nn::lm::split(table.rows(), settings.split, settings.seed)[0].len() * targets.len();
+    let weights = neurarm_nn::lm::weight_count(encoding.features(inputs.len()), settings.hidden, targets.len()).unwrap_or(0);
+    let training_values = neurarm_nn::lm::split(table.rows(), settings.split, settings.seed)[0].len() * targets.len();
     if weights > training_values {
         eprintln!(
             "notice: the net has {weights} weights for {training_values} training target values: it can fit noise; validation stopping is what holds it"
@@ -185,13 +185,12 @@ fn parse_damping(text: &str) -> Result<Damping> {
 
 /// Parses a net kind for clap.
 fn parse_kind(text: &str) -> Result<NetKind> {
-    // `NetKind::parse` says what is wrong in words.
-    NetKind::parse(text).map_err(anyhow::Error::msg)
+    Ok(NetKind::parse(text)?)
 }
 
 /// A stop reason as words.
-fn stop_reason_text(reason: neurarm_physics::nn::StopReason) -> &'static str {
-    use neurarm_physics::nn::StopReason::*;
+fn stop_reason_text(reason: neurarm_nn::StopReason) -> &'static str {
+    use neurarm_nn::StopReason::*;
     match reason {
         Epochs => "the epoch limit",
         Goal => "the error goal",

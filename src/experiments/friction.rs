@@ -10,10 +10,10 @@ use super::{identification_internal_step, joint_loop, lightest_inertias, real_ha
 pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_nn::encoding::LOG_SPEED_SCALE_RAD_S;
+use neurarm_nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::arm::{coriolis_of_one_joint_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
 use neurarm_physics::control::holds::{friction_hold_accelerations_into, friction_hold_torques_into};
-use neurarm_physics::nn::encoding::LOG_SPEED_SCALE_RAD_S;
-use neurarm_physics::nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};
 
 /// How the friction runs hold the joints that are not driven.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -565,7 +565,7 @@ pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_
     // jump is anywhere, as it rarely holds a pair near q̇ = 0, and scoring at the pairs alone
     // let a net overshoot between the pair at rest and the first moving one.
     const STARTS: u64 = 10;
-    let mut best: Option<(f64, TrainSettings, neurarm_physics::nn::Trained)> = None;
+    let mut best: Option<(f64, TrainSettings, neurarm_nn::Trained)> = None;
     for start in 0..STARTS {
         let mut settings =
             TrainSettings { hidden: 15, restarts: 1, max_fail: 20, seed: seed + joint as u64 + 7919 * start, ..TrainSettings::default() };
@@ -573,7 +573,7 @@ pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_
         // (the first split seed from there that does), or the jump lands anywhere in the band.
         if let Some(rest) = pairs.iter().position(|p| p.0 == 0.0) {
             for _ in 0..1000 {
-                if neurarm_physics::nn::lm::split(pairs.len(), settings.split, settings.seed)[0].contains(&rest) {
+                if neurarm_nn::lm::split(pairs.len(), settings.split, settings.seed)[0].contains(&rest) {
                     break;
                 }
                 settings.seed += 1000;
@@ -668,7 +668,7 @@ impl FrictionNetError {
 /// The error of `net` (velocity → torque) against the friction law `law` (see
 /// [`FrictionNetError`]).
 pub fn friction_net_error(net: &WeightsFile, law: &JointFriction, min_speed: f64, max_speed: f64) -> Result<FrictionNetError> {
-    let mlp = net.network().map_err(anyhow::Error::msg)?;
+    let mlp = net.network()?;
     let steps = ((max_speed - min_speed) / 1e-3).round() as usize;
     let (mut sq, mut worst, mut largest, mut count) = (0.0, 0.0f64, 0.0f64, 0usize);
     for k in 0..=steps {

@@ -13,9 +13,9 @@ use super::friction::FrictionCurve;
 use super::{identification_internal_step, joint_loop, parallel, real_handles, GravityDesign, Settings};
 use crate::identify::{gravity_pair, GravityCorrection, GravityMeasurement, GravityOptions, PassFault, PassWindow};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::arm::{gravity_torques, ArmData, ArmParams};
 use neurarm_physics::control::holds::gravity_hold_torques_into;
-use neurarm_physics::nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 
 /// One averaged measurement: the mean of the up and down passes' angles [rad] and torques [N·m].
 pub type GravityPair = (Vec<f64>, Vec<f64>);
@@ -493,7 +493,7 @@ pub struct GravityNetErrors {
 pub fn gravity_net_errors(gravity_net: &WeightsFile, arm: &ArmParams, span: f64, settings: &Settings) -> Result<GravityNetErrors> {
     let vertical = arm.clone().with_base_angle(PI / 2.0);
     let n = arm.dof();
-    let net = gravity_net.network().map_err(anyhow::Error::msg)?;
+    let net = gravity_net.network()?;
     let periodic = net.encoding.is_periodic();
     let low = &gravity_net.input_scaling.min;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(settings.seed + 99);

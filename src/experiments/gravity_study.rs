@@ -11,8 +11,8 @@ use serde::Serialize;
 use super::friction::FrictionCurve;
 use super::gravity::{design_poses, design_span, gravity_net_errors, measure_gravity, sampled_poses_drawn, train_gravity_net};
 use super::{parallel, GravityDesign, Settings};
+use neurarm_nn::InputEncoding;
 use neurarm_physics::arm::ArmParams;
-use neurarm_physics::nn::InputEncoding;
 
 /// Sizes of the sampled designs of the study, up to its largest.
 const SAMPLED_SIZES: [usize; 8] = [25, 50, 100, 200, 400, 800, 1600, 3200];
@@ -78,7 +78,7 @@ pub fn gravity_study(
     let started = Instant::now();
     let mut designs: Vec<(GravityDesign, Vec<super::GravityPair>)> = Vec::new();
     // The smallest grid from 3 points per joint that the trainer's split can take.
-    let fewest = neurarm_physics::nn::lm::minimum_samples(neurarm_physics::nn::TrainSettings::default().split);
+    let fewest = neurarm_nn::lm::minimum_samples(neurarm_nn::TrainSettings::default().split);
     let mut k: usize = 3;
     while k.saturating_pow(n as u32) < fewest {
         k += 1;

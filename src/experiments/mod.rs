@@ -481,7 +481,7 @@ mod tests {
         // 7² = 49 poses, 98 torques, would not determine the 177 weights of a 2-joint net.
         assert_eq!(paper.fewest_gravity_poses(2), 177);
         assert_eq!(paper.design_for(2), GravityDesign::Grid { per_joint: 14 });
-        let raw = Settings { gravity_encoding: neurarm_physics::nn::InputEncoding::Raw, ..Settings::paper() };
+        let raw = Settings { gravity_encoding: neurarm_nn::InputEncoding::Raw, ..Settings::paper() };
         assert_eq!(raw.fewest_gravity_poses(2), 127);
         assert_eq!(raw.design_for(2), GravityDesign::Grid { per_joint: 12 });
         for n in 5..=8 {

@@ -8,8 +8,8 @@ use super::friction::FrictionNetError;
 use super::gravity::GravityNetErrors;
 use super::gravity_study::GravityStudy;
 use super::{Arms, FrictionPair, GravityDesign, GravityPair, LoopRun, RealOrigin, Settings};
+use neurarm_nn::{InputEncoding, WeightsFile};
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::nn::{InputEncoding, WeightsFile};
 
 /// How much sim NN/perfect can tell: the simulated arm tracked with its own true friction law
 /// off by ∓[`LAW_ERROR`](super::paper::LAW_ERROR) (every joint's Coulomb and viscous parts

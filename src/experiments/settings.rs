@@ -7,10 +7,10 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::{tracking_start, FrictionHold};
+use neurarm_nn::InputEncoding;
 use neurarm_physics::arm::FrictionBranch;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::{ReferencePlacement, TaskSpaceGains};
-use neurarm_physics::nn::InputEncoding;
 
 /// Fewest joints the experiments take: the task-space loop tracks a planar position.
 pub const MIN_JOINTS: usize = 2;

@@ -11,7 +11,7 @@ use super::plot::{write_png, Panel, Series, Style};
 use crate::experiments::gravity_study::GravityStudy;
 use crate::experiments::paper::PaperRun;
 use crate::experiments::{GravityDesign, LoopRun};
-use neurarm_physics::nn::InputEncoding;
+use neurarm_nn::InputEncoding;
 
 /// Most points of a scatter series: more only slows the PNG down.
 const MAX_SCATTER: usize = 2000;
@@ -56,10 +56,7 @@ fn write_friction_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
     for (k, tag) in ["simulated", real_label(run)].iter().enumerate() {
         let arm = if k == 0 { &run.arms.nominal.arm } else { &run.arms.real.arm };
         for j in 0..n {
-            let net = run.friction_nets[k * n + j]
-                .network()
-                .map_err(anyhow::Error::msg)
-                .with_context(|| format!("the friction net of joint {} ({tag})", j + 1))?;
+            let net = run.friction_nets[k * n + j].network().with_context(|| format!("the friction net of joint {} ({tag})", j + 1))?;
             let speeds: Vec<f64> = (-1000..=1000).map(|i| i as f64 * top / 1000.0).collect();
             let law = arm.friction[j];
             panels.push(Panel {

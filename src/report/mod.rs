@@ -13,7 +13,7 @@ use crate::experiments::gravity_study::GravityStudy;
 use crate::experiments::paper::{PaperRun, LOOPS};
 use crate::experiments::{GravityDesign, LoopRun};
 use crate::table::{write_atomic, write_text_atomic};
-use neurarm_physics::nn::InputEncoding;
+use neurarm_nn::InputEncoding;
 
 /// Writes a CSV table with a header of `names` to `path`.
 fn write_rows(path: &Path, names: &[String], rows: impl Iterator<Item = Vec<f64>>) -> anyhow::Result<()> {

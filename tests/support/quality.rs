@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
+use neurarm_nn::WeightsFile;
 use neurarm_physics::config::ArmConfig;
-use neurarm_physics::nn::WeightsFile;
 
 /// Friction of the run in `out` on the simulated arm `config` and the real arm `real`: every
 /// identified pair of the simulated arm within 0.02 N·m of the law, or 0.5 % of the joint's

@@ -41,7 +41,7 @@ use neurarm_fmi_export::codec::{Put, Reader};
 use neurarm_fmi_export::{
     BooleanVar, Causality, Model, ModelDescription, ModelError, RealVar, StringVar, TableBuilder, Values, Variability,
 };
-use neurarm_physics::nn::{EncodedNet, WeightsFile};
+use neurarm_nn::{EncodedNet, WeightsFile};
 use serde::{Deserialize, Serialize};
 
 use crate::compensator::{load_nets, NetCompensator};

@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use neurarm_fmi_export::{Model, ModelDescription, ModelError, StaticModel, TableBuilder, Values};
-use neurarm_physics::nn::{EncodedNet, InputEncoding, NetKind, Signal, WeightsFile};
+use neurarm_nn::{EncodedNet, InputEncoding, NetKind, Signal, WeightsFile};
 use serde::{Deserialize, Serialize};
 
 use crate::ports::{CompensatorPorts, Parts};
@@ -97,7 +97,7 @@ pub(crate) fn load_nets(
     let mut crc = crc32fast::Hasher::new();
     let mut load = |name: &str| -> Result<WeightsFile, BuildError> {
         let path = crate::resource_file(dir, name)?;
-        let text = neurarm_physics::text_file::read_text(&path, neurarm_physics::text_file::MAX_WEIGHTS_BYTES)
+        let text = neurarm_physics::text_file::read_text(&path, neurarm_nn::read_limits::FILE_BYTES)
             .map_err(|e| BuildError::Weights { path: path.clone(), message: e.to_string() })?;
         crc.update(text.as_bytes());
         WeightsFile::from_json(&text, &path.display().to_string()).map_err(|e| BuildError::Spec(e.to_string()))

@@ -9,7 +9,7 @@ mod nets;
 use nets::net_file;
 use neurarm_fmi_export::instance::{Instance, Status};
 use neurarm_models::*;
-use neurarm_physics::nn::WeightsFile;
+use neurarm_nn::WeightsFile;
 
 struct Fixture {
     dir: tempfile::TempDir,

@@ -13,10 +13,10 @@ use nets::net_file;
 use neurarm_fmi_export::instance::{Instance, Status};
 use neurarm_fmi_export::Model;
 use neurarm_models::*;
+use neurarm_nn::WeightsFile;
 use neurarm_physics::arm::ArmParams;
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::control::TaskSpaceGains;
-use neurarm_physics::nn::WeightsFile;
 
 /// Initialises `model`, then counts the allocations of 500 steps of 1 ms, setting every real
 /// input to a new value before each step.

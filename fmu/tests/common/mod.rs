@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex};
 
 use neurarm_fmi_export::description::{BaseType, ModelDescription};
 use neurarm_models::{FmuSpec, SPEC_FILE};
-use neurarm_physics::nn::NetKind;
+use neurarm_nn::NetKind;
 
 #[path = "../../../crates/models/tests/support/nets.rs"]
 mod nets;

@@ -11,7 +11,7 @@ use crate::experiments::gravity::gravity_pair_error;
 use crate::experiments::gravity_study::{gravity_study, GravityStudy};
 use crate::experiments::*;
 use crate::table::write_text_atomic;
-use neurarm_physics::nn::{InputEncoding, WeightsFile};
+use neurarm_nn::{InputEncoding, WeightsFile};
 
 /// What the friction identification found, per arm (simulated, then real) and joint.
 pub(super) struct FrictionData {

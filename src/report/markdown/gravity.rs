@@ -7,7 +7,7 @@ use super::{header, row};
 use crate::experiments::gravity::{RegionErrors, STEADY_RETRIES, STEADY_SHARE};
 use crate::experiments::paper::PaperRun;
 use crate::experiments::{GravityDesign, GRAVITY_SWEEP_SPEED_RAD_S};
-use neurarm_physics::nn::InputEncoding;
+use neurarm_nn::InputEncoding;
 
 /// Appends the section "Gravity identification".
 pub(super) fn write(s: &mut String, run: &PaperRun) {

@@ -1,6 +1,6 @@
 //! Small nets with fixed weights for the tests of the models and of the FMU binary.
 
-use neurarm_physics::nn::{InputEncoding, MinMaxScaling, NetKind, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
+use neurarm_nn::{InputEncoding, MinMaxScaling, NetKind, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
 
 /// A small net of unspecified kind with fixed weights: inputs `x_i`, outputs `y_i`, no units.
 #[allow(dead_code)]
@@ -15,8 +15,8 @@ pub fn net(kind: NetKind, joint: Option<usize>, inputs: Vec<Signal>, outputs: Ve
     let value = |a: usize, b: usize| ((a * 7 + b * 3) % 11) as f64 / 8.0 - 0.6;
     let (n_in, n_out) = (inputs.len(), outputs.len());
     WeightsFile {
-        format: neurarm_physics::nn::weights::FORMAT.into(),
-        version: neurarm_physics::nn::weights::VERSION,
+        format: neurarm_nn::weights::FORMAT.into(),
+        version: neurarm_nn::weights::VERSION,
         encoding: InputEncoding::Raw,
         kind,
         joint,

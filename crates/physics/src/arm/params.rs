@@ -3,6 +3,7 @@
 //! Parameters are plain immutable data (the "model" half of a MuJoCo-style model/data split);
 //! scratch space lives in [`crate::arm::ArmData`].
 
+pub use neurarm_nn::text::show_number;
 use serde::{Deserialize, Serialize};
 
 use super::friction::JointFriction;
@@ -110,16 +111,6 @@ pub enum ParamError {
         /// What it must be.
         why: &'static str,
     },
-}
-
-/// `value` for a message: as written for ordinary magnitudes, in exponent form beyond them
-/// (1.7e308 rather than 309 digits).
-pub fn show_number(value: f64) -> String {
-    if value == 0.0 || !value.is_finite() || (1e-4..1e15).contains(&value.abs()) {
-        value.to_string()
-    } else {
-        format!("{value:e}")
-    }
 }
 
 /// Checks that `value` is finite and satisfies `ok`, naming the parameter otherwise.

@@ -1,5 +1,6 @@
 //! A global allocator that counts the allocations made on a thread while it watches, for the
-//! tests that a step allocates nothing. Shared by this crate's and `neurarm-models`' tests.
+//! tests that a step or a training epoch allocates nothing. Shared by this crate's,
+//! `neurarm-nn`'s and `neurarm-models`' tests.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

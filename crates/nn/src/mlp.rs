@@ -59,7 +59,7 @@ impl MinMaxScaling {
 }
 
 /// A two-layer feed-forward network: tansig hidden layer, linear output layer.
-/// (Stored on disk through [`crate::nn::WeightsFile`].)
+/// (Stored on disk through [`crate::WeightsFile`].)
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mlp {
     /// Input weights, hidden × inputs.

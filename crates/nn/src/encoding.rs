@@ -8,7 +8,7 @@
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use super::mlp::Mlp;
+use crate::mlp::Mlp;
 
 /// The encoding of a net's inputs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -58,12 +58,9 @@ impl InputEncoding {
     }
 
     /// Parses [`InputEncoding::name`] (a `-` may stand for `_`).
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, UnknownEncoding> {
         let wanted = text.trim().replace('-', "_");
-        Self::ALL.into_iter().find(|e| e.name() == wanted).ok_or_else(|| {
-            let names: Vec<&str> = Self::ALL.iter().map(|e| e.name()).collect();
-            format!("unknown input encoding '{text}': use one of {}", names.join(", "))
-        })
+        Self::ALL.into_iter().find(|e| e.name() == wanted).ok_or_else(|| UnknownEncoding { text: text.into() })
     }
 
     /// True when the encoded net is 2π-periodic in every input.
@@ -130,6 +127,14 @@ impl InputEncoding {
     }
 }
 
+/// A name that is none of [`InputEncoding::ALL`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown input encoding '{text}': use one of {}", InputEncoding::ALL.map(InputEncoding::name).join(", "))]
+pub struct UnknownEncoding {
+    /// The name given.
+    pub text: String,
+}
+
 /// A two-layer net behind its input encoding: what a weights file describes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EncodedNet {
@@ -193,7 +198,7 @@ impl EncodedNet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::nn::{MinMaxScaling, TrainReport, TrainSettings, WeightsFile};
+    use crate::{MinMaxScaling, TrainReport, TrainSettings, WeightsFile};
     use rand::{Rng, SeedableRng};
 
     fn random_net(encoding: InputEncoding, inputs: usize, seed: u64) -> EncodedNet {
@@ -245,7 +250,7 @@ mod tests {
         TrainReport {
             epochs: 0,
             best_epoch: 0,
-            stop_reason: crate::nn::StopReason::Epochs,
+            stop_reason: crate::StopReason::Epochs,
             restart: 0,
             train_mse: 0.0,
             validation_mse: None,
@@ -257,7 +262,7 @@ mod tests {
     #[test]
     fn the_weights_file_keeps_the_encoding_and_reads_version_1_files_as_raw() {
         let net = random_net(InputEncoding::LinkAngles, 2, 3);
-        let signals = |p: &str, n: usize| (0..n).map(|i| crate::nn::Signal { name: format!("{p}_{i}"), unit: "rad".into() }).collect();
+        let signals = |p: &str, n: usize| (0..n).map(|i| crate::Signal { name: format!("{p}_{i}"), unit: "rad".into() }).collect();
         let report = untrained_report();
         let file = WeightsFile::new(&net.mlp, signals("q", 2), signals("tau", 3), TrainSettings::default(), report)
             .with_encoding(InputEncoding::LinkAngles);
@@ -276,7 +281,7 @@ mod tests {
         old["encoding"] = "link_angles".into();
         let e = WeightsFile::from_json(&old.to_string(), "old.json").unwrap_err().to_string();
         assert!(e.contains("version 1 file has raw inputs only"), "{e}");
-        assert!(InputEncoding::parse("polar").unwrap_err().contains("raw, joint_angles, link_angles, log_speed"));
+        assert!(InputEncoding::parse("polar").unwrap_err().to_string().contains("raw, joint_angles, link_angles, log_speed"));
         assert_eq!(InputEncoding::parse("link-angles"), Ok(InputEncoding::LinkAngles));
     }
 
@@ -316,7 +321,7 @@ mod tests {
             ..net.mlp.clone()
         };
         let net = EncodedNet { encoding: InputEncoding::LogSpeed, mlp };
-        let signal = |n: &str, u: &str| vec![crate::nn::Signal { name: n.into(), unit: u.into() }];
+        let signal = |n: &str, u: &str| vec![crate::Signal { name: n.into(), unit: u.into() }];
         let report = untrained_report();
         let file = WeightsFile::new(&net.mlp, signal("qd_1", "rad/s"), signal("tau_friction_1", "N.m"), TrainSettings::default(), report)
             .with_encoding(InputEncoding::LogSpeed);
@@ -325,7 +330,7 @@ mod tests {
         assert_eq!(back.encoding, InputEncoding::LogSpeed);
         // The encoded net at 3 mrad/s is the plain net at ln 4.
         assert_eq!(back.evaluate(&[3e-3]), net.mlp.evaluate(&[4f64.ln()]));
-        let e = file.gravity().network().unwrap_err();
+        let e = file.gravity().network().unwrap_err().to_string();
         assert!(e.contains("a gravity net takes angles"), "{e}");
     }
 }

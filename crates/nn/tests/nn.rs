@@ -2,8 +2,8 @@
 //! of known functions, determinism, early stopping and the weights file.
 
 use nalgebra::DMatrix;
-use neurarm_physics::nn::lm::{normal_equations, output_jacobian, split, train_with_threads, Damping};
-use neurarm_physics::nn::*;
+use neurarm_nn::lm::{normal_equations, output_jacobian, split, train_with_threads, Damping};
+use neurarm_nn::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -280,7 +280,7 @@ fn weights_files_of_version_2_are_read_with_an_unspecified_kind() {
 
 #[test]
 fn training_refuses_settings_and_data_that_cannot_make_a_useful_net() {
-    use neurarm_physics::nn::lm::{check_settings, minimum_samples, weight_count, workspace_bytes, TrainError};
+    use neurarm_nn::lm::{check_settings, minimum_samples, weight_count, workspace_bytes, TrainError};
     let ok = TrainSettings::default();
     assert_eq!(minimum_samples(ok.split), 17);
     assert!(check_settings(&ok, 1, 1, 17).is_ok());
@@ -325,7 +325,7 @@ fn training_refuses_settings_and_data_that_cannot_make_a_useful_net() {
 
 #[test]
 fn a_recorded_time_series_is_told_from_identified_pairs() {
-    use neurarm_physics::nn::lm::time_series_warning;
+    use neurarm_nn::lm::time_series_warning;
     // 1 kHz samples of a settling velocity.
     let series = DMatrix::from_fn(1, 3000, |_, k| 2.0 * (1.0 - (-(k as f64) * 1e-3 / 0.3).exp()));
     assert!(time_series_warning(&series).is_some());
