@@ -28,7 +28,7 @@ pub struct EvalArgs {
 pub fn run(args: EvalArgs) -> Result<()> {
     let EvalArgs { net, data, output } = args;
     let weights = WeightsFile::read(&net)?;
-    let mlp = weights.network().map_err(anyhow::Error::msg)?;
+    let mlp = weights.network()?;
     let names: Vec<&str> = weights.inputs.iter().map(|s| s.name.as_str()).collect();
     let table = NumericTable::read(&data, &names)?;
     let columns: Vec<&[f64]> = names.iter().map(|n| table.column(n).expect("required")).collect();
