@@ -475,13 +475,9 @@ fn speed_level_plan(moving_levels: &[(f64, f64)], settings: &Settings) -> Vec<(f
 /// `spacing` [rad/s] while at least 3.5 bin widths, then 2.5, 1.5 and 0.5 widths (0.125, 0.075
 /// and 0.025 rad/s for the paper's bins), each unless `first` lies in the same bin.
 ///
-/// The lowest three are taken whatever the spaced ones left: they sit where a Stribeck dip
-/// bends, and a rule that dropped them when the last spaced speed lay close above or when none
-/// fitted (a first level under 0.15 rad/s) left joints with no pair below their Stribeck
-/// velocity, and nets 15–25 % off there (a random-family arm, seed 4). They lie mid-bin, and
-/// the spaced ones stop a bin above them: levels aimed at 0.1 and about 0.14 rad/s once shared
-/// a bin, whose pair (their mean speed and mean friction) was 0.035 N·m off the law on a
-/// Stribeck dip (seed 10).
+/// The lowest three are taken whatever the spaced ones left, since they sit where a Stribeck
+/// dip bends; they lie mid-bin, and the spaced ones stop a bin above them so that no two levels
+/// share a bin (docs/decisions/0002-friction-speed-levels.md).
 pub fn speed_level_targets(first: f64, spacing: f64, bin_width: f64) -> Vec<f64> {
     let mut targets = Vec::new();
     let mut target = first - spacing;
@@ -503,9 +499,7 @@ pub fn speed_level_targets(first: f64, spacing: f64, bin_width: f64) -> Vec<f64>
 ///
 /// Constant torques leave such gaps where friction falls with speed faster than the torque
 /// steps can follow (a Stribeck dip past the first moving level, viscous friction falling with
-/// speed), and a net bridged them blindly: on an emulated real 7-joint arm (seed 6 of the
-/// family, joint 2, no moving level between 0.12 and 2.2 rad/s) it swung to the wrong sign
-/// there, 60 % of the joint's largest friction RMS off its law.
+/// speed), and a net would bridge them blindly (docs/decisions/0002-friction-speed-levels.md).
 pub fn gap_level_targets(below: f64, above: f64, spacing: f64) -> Vec<f64> {
     let mut targets = Vec::new();
     if above - below <= 2.0 * spacing {

@@ -62,8 +62,7 @@ const STIFFNESS_POSES: usize = 256;
 /// or 1 ms / k (k whole) where that would leave RK4 unstable on the arm's viscous friction:
 /// h × rate ≤ 2 (RK4's bound is 2.785) for the fastest rate of
 /// [`neurarm_physics::arm::largest_viscous_rate`] over 256 seeded random poses and the
-/// stretched arm, taken twice for the poses not seen. (An 8-joint family arm, seed 14, reached
-/// 3781 1/s; at 1 ms its gravity sweep blew up to NaN torques.)
+/// stretched arm, taken twice for the poses not seen (docs/decisions/0003-identification-substep.md).
 pub fn identification_internal_step(arm: &ArmParams) -> f64 {
     use rand::{Rng, SeedableRng};
     let n = arm.dof();

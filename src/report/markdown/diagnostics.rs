@@ -8,7 +8,7 @@ use crate::report::figures::real_label;
 
 /// Below this none/perfect ratio the report says the arm has little friction.
 const LITTLE_FRICTION_RATIO: f64 = 5.0;
-/// The NN/perfect ratio the paper's 1.14 suggests and issue 24 set as the target.
+/// The NN/perfect ratio the paper's 1.14 suggests, the project's target.
 const SIM_NN_OVER_PERFECT_TARGET: f64 = 1.10;
 
 /// Appends the notes of the diagnostic loops to the Table 1 section.

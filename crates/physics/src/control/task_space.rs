@@ -139,8 +139,8 @@ pub fn task_space_acceleration_into(
         }
     } else {
         // Damping only, computed as −k (N q̇) rather than N (−k q̇): the same in exact
-        // arithmetic, and the rounding the long closed loops were measured with (they are
-        // sensitive to it, see issue 24's notes).
+        // arithmetic, and the rounding the long closed loops were measured with
+        // (docs/decisions/0001-null-space-damping.md).
         d.null_projector.mul_to(&d.qd, &mut d.null_motion);
         for ((u, t), m) in d.u.iter_mut().zip(d.task.iter()).zip(d.null_motion.iter()) {
             *u = t - gains.null_damping * m;

@@ -3,8 +3,7 @@
 //! the projection bounds every torque's change; the leakage pulls the nets back; the adapted
 //! weights are FMU state.
 
-#[path = "support/nets.rs"]
-mod nets;
+use neurarm_test_support::nets;
 
 use nets::net_file;
 use neurarm_fmi_export::instance::{Instance, Status};

@@ -287,8 +287,8 @@ fn sorted(list: &[&str]) -> Vec<String> {
 
 #[test]
 fn every_exported_function_is_checked_against_its_header() {
-    let fmi2 = exported(include_str!("../src/fmi2/abi.rs"), "export_fmi2");
-    let fmi3 = exported(include_str!("../src/fmi3/abi.rs"), "export_fmi3");
+    let fmi2 = exported(include_str!("../../src/fmi2/abi.rs"), "export_fmi2");
+    let fmi3 = exported(include_str!("../../src/fmi3/abi.rs"), "export_fmi3");
     assert_eq!(sorted(FMI2_CHECKED), fmi2);
     assert_eq!(sorted(FMI3_CHECKED), fmi3);
     // FMI 2.0: the common and Co-Simulation functions; FMI 3.0: every function of the header.

@@ -9,8 +9,7 @@ use std::path::Path;
 
 use neurarm_physics::config::ArmConfig;
 
-#[path = "support/quality.rs"]
-mod quality;
+use crate::quality;
 
 /// A run of `neurarm paper` into `out`: the experiments, then their report.
 fn run_paper(out: &Path, arms: &Arms, settings: &Settings, log: &mut dyn FnMut(&str)) -> anyhow::Result<PaperRun> {

@@ -2,7 +2,7 @@
 //! as a C tool chain would; then the same under valgrind's memcheck, leaving FMU states unfreed
 //! at `fmi2FreeInstance` as a careless host does: no error, no leak.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::process::Command;

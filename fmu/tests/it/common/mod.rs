@@ -10,9 +10,8 @@ use neurarm_fmi_export::description::{BaseType, ModelDescription};
 use neurarm_models::{FmuSpec, SPEC_FILE};
 use neurarm_nn::NetKind;
 
-#[path = "../../../crates/models/tests/support/nets.rs"]
-mod nets;
 pub use nets::{net, signal};
+use neurarm_test_support::nets;
 
 pub const OK: c_int = 0;
 pub const ERROR: c_int = 3;

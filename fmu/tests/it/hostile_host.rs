@@ -4,7 +4,7 @@
 //! time by more than rounding, blank instance names, the independent variable `time`, and a
 //! compensator switched on for a part it has no nets for. Each case failed before its fix.
 
-mod common;
+use crate::common;
 
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::sync::{Arc, Mutex};

@@ -11,7 +11,7 @@
 //! one (the ignored test: 100 PlanarArm instances × 10⁶ steps and two of every other kind) and
 //! prints the figures. Needs the FMU binary built (`cargo build --release -p neurarm-fmu`).
 
-mod common;
+use crate::common;
 
 use std::ffi::c_void;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -3,7 +3,7 @@
 //! name logged, adapted weights restore bit for bit through FMU states and serialisation into
 //! another instance, and eight instances in eight threads learn as one alone.
 
-mod common;
+use crate::common;
 
 use common::*;
 use neurarm_models::{AdaptationLaw, AdaptiveCompensatorSpec, ModelSpec};

@@ -4,7 +4,7 @@
 //! may do, times and tolerances that are not usable, FMU states holding NaN or infinities
 //! with a valid checksum, and model results that are not finite.
 
-mod common;
+use crate::common;
 
 use common::*;
 use neurarm_models::{FmuSpec, GainSpec, JointControllerSpec, ModelSpec, TaskSpaceControllerSpec, SPEC_FILE};

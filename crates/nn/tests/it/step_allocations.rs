@@ -1,11 +1,7 @@
 //! A training epoch allocates nothing but the GEMM library's packing buffers: a counting global
 //! allocator watches the training thread.
 
-// The counting allocator of neurarm-physics' tests (shared with neurarm-models'); this test
-// uses `start` and `stop` only.
-#[path = "../../physics/tests/support/counting.rs"]
-#[allow(dead_code)]
-mod counting;
+use neurarm_test_support::allocations as counting;
 
 use nalgebra::DMatrix;
 use neurarm_nn::lm::{gemm_calls, train_with_threads};

@@ -1,7 +1,7 @@
 //! The PlanarArm FMU through its C ABI, loaded with dlopen as a host would: exported symbols,
 //! the state machine, argument checks, FMU states, reset and threads.
 
-mod common;
+use crate::common;
 
 use std::ffi::{c_int, CString};
 

@@ -3,7 +3,6 @@
 use neurarm_nn::{InputEncoding, MinMaxScaling, NetKind, Signal, StopReason, TrainReport, TrainSettings, WeightsFile};
 
 /// A small net of unspecified kind with fixed weights: inputs `x_i`, outputs `y_i`, no units.
-#[allow(dead_code)]
 pub fn net_file(n_in: usize, hidden: usize, n_out: usize) -> WeightsFile {
     let signals = |p: &str, n: usize| (1..=n).map(|i| signal(format!("{p}_{i}"), "")).collect();
     net(NetKind::Unspecified, None, signals("x", n_in), signals("y", n_out), hidden)

@@ -1,6 +1,7 @@
-//! A global allocator that counts the allocations made on a thread while it watches, for the
-//! tests that a step or a training epoch allocates nothing. Shared by this crate's,
-//! `neurarm-nn`'s and `neurarm-models`' tests.
+//! A global allocator that counts the allocations (and reallocations) made on a thread while it
+//! watches, for the tests that a step or a training epoch allocates nothing. Counting per
+//! thread keeps tests that run beside each other in one binary out of each other's counts. A
+//! test binary gets this allocator by calling any function here.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -21,6 +22,13 @@ unsafe impl GlobalAlloc for Counting {
         }
         // SAFETY: the caller upholds GlobalAlloc's contract for these arguments; they are passed on as given.
         unsafe { System.alloc(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if WATCHING.with(Cell::get) {
+            COUNT.with(|c| c.set(c.get() + 1));
+        }
+        // SAFETY: the caller upholds GlobalAlloc's contract for these arguments; they are passed on as given.
+        unsafe { System.realloc(ptr, layout, new_size) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         // SAFETY: the caller upholds GlobalAlloc's contract for these arguments; they are passed on as given.

@@ -1,8 +1,7 @@
 //! The drift parameters of the arm and the ideal compensator: tunable while running, taken up
 //! from the next step, refused by their FMU names, allocation-free when ramped.
 
-#[path = "../../physics/tests/support/counting.rs"]
-mod counting;
+use neurarm_test_support::allocations as counting;
 
 use neurarm_fmi_export::instance::{Instance, Status};
 use neurarm_models::*;

@@ -2,11 +2,9 @@
 //! instance (the code the C ABI calls), initialised and driven with changing inputs, while a
 //! counting global allocator watches the stepping thread.
 
-#[path = "../../physics/tests/support/counting.rs"]
-mod counting;
+use neurarm_test_support::allocations as counting;
 
-#[path = "support/nets.rs"]
-mod nets;
+use neurarm_test_support::nets;
 
 use counting::allocations_during;
 use nets::net_file;

@@ -1,7 +1,6 @@
 //! A step allocates nothing: a counting global allocator watches the stepping thread.
 
-#[path = "support/counting.rs"]
-mod counting;
+use neurarm_test_support::allocations as counting;
 
 use counting::allocations_during;
 use neurarm_physics::arm::*;

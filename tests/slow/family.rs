@@ -27,8 +27,7 @@ use neurarm::experiments::{Arms, GravityDesign, NoProgress, Settings};
 use neurarm_physics::config::ArmConfig;
 use neurarm_physics::family::{random_arm, FAMILY_MAX_JOINTS, FAMILY_MIN_JOINTS};
 
-#[path = "support/quality.rs"]
-mod quality;
+use crate::quality;
 
 /// Seeds of the family arms run here, for every joint count.
 const SEEDS: [u64; 2] = [1, 2];

@@ -1,0 +1,5 @@
+//! The nets' integration tests.
+
+mod limits;
+mod nn;
+mod step_allocations;
