@@ -58,6 +58,7 @@ struct Model {
 
 /// Every model to soak: four PlanarArm configurations (plain; noise, encoders and torque limits;
 /// gravity in the plane; three joints), then one of each other kind.
+#[allow(clippy::too_many_lines, reason = "a table of the models soaked, one entry per kind, read top to bottom")]
 fn models() -> Vec<Model> {
     let arm = ArmParams::default_four_link();
     let mut noisy = ArmConfig::default();
@@ -426,6 +427,7 @@ struct Figures {
 }
 
 /// Runs the soak of `plan`; asserts every equality; returns the figures as lines to print.
+#[allow(clippy::too_many_lines, reason = "one soak scenario whose phases share the instances' state; a test read top to bottom")]
 fn soak(plan: Plan) -> Figures {
     let heap_before = heap_in_use();
     let models: Vec<Arc<Model>> = models().into_iter().map(Arc::new).collect();
