@@ -114,7 +114,7 @@ fn a_caught_panic_prints_nothing_on_the_hosts_console() {
             .output()
             .unwrap()
     };
-    let out = run("panics_become_fatal_and_never_unwind_into_the_host");
+    let out = run("fmi_panics::panics_become_fatal_and_never_unwind_into_the_host");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed"), "the test ran");

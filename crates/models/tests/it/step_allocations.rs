@@ -36,7 +36,7 @@ fn step_allocations(model: Box<dyn Model>) -> usize {
     let mut values = vec![0.0; inputs.len()];
     let mut out = vec![0.0; outputs.len()];
     // Warm up: the counter itself is lazily set up on first use.
-    assert!(allocations_during(|| drop(Box::new(1))) >= 1, "the counter must see allocations");
+    assert!(allocations_during(|| drop(std::hint::black_box(Box::new(1)))) >= 1, "the counter must see allocations");
     let count = allocations_during(|| {
         for k in 0..500 {
             let t = k as f64 * 1e-3;
