@@ -10,15 +10,17 @@
 //! plain loop is checked against the master over 5 s, and each loop steps once.
 //!
 //! After criterion, both loops are also timed in alternating batches (see
-//! [`alternating_batches`]), into `alternating.json`.
+//! [`alternating_batches`]), into `alternating.json`; `LOOP_BENCH_BATCHES` sets how many
+//! (`scripts/bench-loop --smoke`: a few).
 //!
 //! `scripts/bench-loop --instructions` counts instructions per step instead (callgrind), which
 //! a shared machine does not disturb; see [`PROFILE_STEPS`].
 //!
 //! The FMUs and nets go to `<target>/closed-loop-bench/` (its `system.toml` is the loop, and
 //! `system.ssp` the same loop as SSP), where `benches/python/loop_ratio.py` has fmpy drive the
-//! same FMUs and libcosim run the SSP. `scripts/bench-loop` runs both and prints the ratios and
-//! real-time factors.
+//! same FMUs and libcosim run the SSP, and checks their runs against the master's end-effector
+//! trajectory over the checked steps (`master_xy.csv`). `scripts/bench-loop` runs both and
+//! prints the ratios and real-time factors.
 
 #![allow(missing_docs)] // criterion_group! makes an undocumented public function
 
@@ -120,6 +122,11 @@ fn loop_step(c: &mut Criterion) {
             "the plain loop left the master's at step {k} (they must agree bit for bit): {row:?} vs ({x}, {y})"
         );
     }
+    let mut csv = String::from("time,arm.x,arm.y\n");
+    for row in check.rows() {
+        csv += &format!("{},{},{}\n", row[0], row[1], row[2]);
+    }
+    std::fs::write(dir.join("master_xy.csv"), csv).expect("master_xy.csv written");
     if let Some(n) = profile_steps {
         let mut plain = PlainLoop::new(nets.iter().map(|w| w.network().expect("net")).collect());
         for _ in 0..n {
@@ -129,9 +136,10 @@ fn loop_step(c: &mut Criterion) {
     c.bench_function("closed_loop_1ms/in_process", |b| b.iter(|| plain_step(&mut plain)));
     let smoke = std::env::args().any(|a| a == "--test");
     if profile_steps.is_none() && !smoke {
-        let (master, plain) = alternating_batches(&mut sim, &mut plain);
+        let batches = std::env::var("LOOP_BENCH_BATCHES").map_or(BATCHES, |s| s.parse().expect("LOOP_BENCH_BATCHES: a count"));
+        let (master, plain) = alternating_batches(&mut sim, &mut plain, batches);
         let json =
-            format!("{{\"batch_steps\": {BATCH_STEPS}, \"batches\": {BATCHES}, \"master_s\": {master:e}, \"plain_s\": {plain:e}}}\n");
+            format!("{{\"batch_steps\": {BATCH_STEPS}, \"batches\": {batches}, \"master_s\": {master:e}, \"plain_s\": {plain:e}}}\n");
         std::fs::write(dir.join("alternating.json"), json).expect("alternating.json written");
     }
 }
@@ -139,7 +147,8 @@ fn loop_step(c: &mut Criterion) {
 /// Steps over which the plain loop must follow the master (5 s: the joints stick and slip in it).
 const CHECKED_STEPS: usize = 5000;
 
-/// Steps per batch and batches per loop of [`alternating_batches`].
+/// Steps per batch and batches per loop of [`alternating_batches`] (unless `LOOP_BENCH_BATCHES`
+/// gives another count).
 const BATCH_STEPS: u32 = 100;
 const BATCHES: u32 = 2000;
 
@@ -147,9 +156,9 @@ const BATCHES: u32 = 2000;
 /// then a batch of the other), the fastest batch of each kept: on a machine that others load,
 /// criterion's runs one after the other can see different loads, while the fastest of many
 /// alternating batches sees each loop at its least disturbed.
-fn alternating_batches(sim: &mut neurarm_cosim::Simulation, plain: &mut PlainLoop) -> (f64, f64) {
+fn alternating_batches(sim: &mut neurarm_cosim::Simulation, plain: &mut PlainLoop, batches: u32) -> (f64, f64) {
     let (mut master_best, mut plain_best) = (f64::INFINITY, f64::INFINITY);
-    for _ in 0..BATCHES {
+    for _ in 0..batches {
         let start = std::time::Instant::now();
         for _ in 0..BATCH_STEPS {
             master_step(sim);

@@ -11,8 +11,10 @@
 //! machine's GEMM speed (measured in the same run, on every thread) are printed beside the
 //! measured epoch time. The scaled data, split and initial weights go to `$LM_BENCH_DIR`
 //! (default `target/lm-bench`) as `gravity4.json` and `gravity6.json`, so that
-//! `benches/python/lm_compare.py` runs numpy, scipy and jaxopt from exactly the same start.
-//! Run through `scripts/bench-lm`.
+//! `benches/python/lm_compare.py` runs numpy, scipy and jaxopt from exactly the same start,
+//! with trainlm's test MSE after each of its first [`CHECKED_EPOCHS`] epochs, which the numpy
+//! loop (the same algorithm) must reproduce. Run through `scripts/bench-lm`; `LM_BENCH_EPOCHS`
+//! caps every run's epochs (its `--smoke` mode: a few).
 
 use std::path::Path;
 use std::time::Instant;
@@ -30,6 +32,9 @@ use serde_json::json;
 
 /// Test MSE (target units²) whose first crossing is timed.
 const TARGET: f64 = 1e-5;
+
+/// Epochs of trainlm's run whose test MSEs are written for the numpy loop's check.
+const CHECKED_EPOCHS: usize = 10;
 
 struct Problem {
     name: &'static str,
@@ -114,6 +119,8 @@ fn epoch_flops(n: usize, h: usize, k: usize, q: usize, v: usize, trials: f64) ->
 
 struct Run {
     json: serde_json::Value,
+    /// Test MSE after each epoch.
+    test_mse: Vec<f64>,
     seconds_per_epoch: f64,
     trials_per_epoch: f64,
 }
@@ -163,6 +170,7 @@ fn run(pb: &Problem, label: &str, settings: &TrainSettings, threads: usize, test
         }),
         seconds_per_epoch: total / epochs as f64,
         trials_per_epoch: trials as f64 / epochs as f64,
+        test_mse: history.iter().map(|h| h.1).collect(),
     }
 }
 
@@ -239,6 +247,7 @@ fn bench(pb: &Problem, threads: usize, (gflops, gflops_1): (f64, f64), dir: &str
         "theta0": net0.parameters(), "hidden": s.hidden, "error_scale": error_scale,
         "settings": s, "epoch": epoch,
         "neurarm": runs.iter().map(|r| r.json.clone()).collect::<Vec<_>>(),
+        "trainlm_test_mse_by_epoch": &runs[0].test_mse[..CHECKED_EPOCHS.min(runs[0].test_mse.len())],
     });
     std::fs::write(format!("{dir}/{}.json", pb.name), data.to_string()).unwrap();
 }
@@ -252,6 +261,7 @@ fn main() {
     let only = std::env::var("LM_BENCH_PROBLEMS").unwrap_or_else(|_| "gravity4,gravity6".into());
     let dir = std::env::var("LM_BENCH_DIR").unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/target/lm-bench").into());
     std::fs::create_dir_all(&dir).unwrap();
+    let epochs_cap: Option<usize> = std::env::var("LM_BENCH_EPOCHS").ok().map(|s| s.parse().expect("LM_BENCH_EPOCHS: a count"));
     let threads = default_threads();
     let (gflops, gflops_1) = (measure_gemm_gflops(512, 12, threads), measure_gemm_gflops(512, 12, 1));
     println!("matrixmultiply dgemm 512^3: {gflops_1:.1} GFLOP/s on 1 thread, {gflops:.1} GFLOP/s on {threads} threads at once");
@@ -259,7 +269,10 @@ fn main() {
     println!("  Gram upper triangle pw(pw+1)Q + Jacobian rows and Jᵀe Q(H(N+1) + 4K(H+1) + H(2K+2N+3)) + JᵀJ p(p+1)/2");
     println!("  + trials (p³/3 + 2p² + Q(2H(N+1) + 2K(H+1))) + validation forward V(2H(N+1) + 2K(H+1)),");
     println!("  pw = H(N+1) + H + 1, p = H(N+1) + K(H+1), Q training and V validation samples");
-    for pb in [gravity4(seed), gravity6(seed)] {
+    for mut pb in [gravity4(seed), gravity6(seed)] {
+        if let Some(cap) = epochs_cap {
+            pb.settings.epochs = pb.settings.epochs.min(cap);
+        }
         if only.split(',').any(|o| o == pb.name) {
             bench(&pb, threads, (gflops, gflops_1), &dir);
         }

@@ -31,6 +31,8 @@ import subprocess
 import sys
 import time
 
+from bench_checks import fail, positive
+
 # As the report's: beyond this settled error [rad] even the ideal compensator leaves joints stuck.
 STUCK_SETTLED_RAD = 0.05
 
@@ -243,6 +245,34 @@ def table(rows):
     return head + "\n".join(lines) + f"\n\n{met} of {len(rows)} arms meet every target.\n"
 
 
+# The figures of a row that are ratios, shares or times: finite and positive in every run.
+POSITIVE = ["sim_nn_over_perfect", "sim_none_over_perfect", "real_nn_over_none", "real_nn_over_none_true", "worst_friction_net_share",
+            "gravity_rms_share", "gravity_max_share", "joint_nn_over_ideal", "run_s"]
+
+
+def check(out, count, rows, text):
+    """The smoke mode's checks: every run finished with its figures; family.json holds the rows
+    and family.md the table; the table rebuilt from the runs' results.json is the same table."""
+    for row in rows:
+        if "error" in row:
+            fail(f"arm {row['seed']}'s run failed ({row['exit_code']}): {row['error']}")
+        for name in POSITIVE:
+            positive(f"arm {row['seed']}: {name}", row[name])
+    with open(os.path.join(out, "family.json")) as f:
+        written = json.load(f)
+    if written["targets"] != TARGETS or [r["seed"] for r in written["arms"]] != list(range(1, count + 1)):
+        fail("family.json does not hold the targets and one row per arm")
+    with open(os.path.join(out, "family.md")) as f:
+        if f.read() != text:
+            fail("family.md is not the table printed")
+    rebuilt = [read_row(out, s, math.nan, 0) for s in range(1, count + 1)]
+    if table(rebuilt) != table(rows):
+        fail("the table rebuilt from the runs' results.json differs from the one built as they ran")
+    met = sum(1 for row in rows if not verdicts(row)[0])
+    print(f"bench-family smoke: OK ({count} arms of {', '.join(str(r['joints']) for r in rows)} joints ran, {met} of them meet every target; "
+          "family.json and family.md written, the table rebuilt from the runs alike)")
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--neurarm", required=True)
@@ -250,6 +280,7 @@ def main():
     p.add_argument("--out", required=True)
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--rebuild", action="store_true", help="only rebuild the table from the runs already in OUT/runs")
+    p.add_argument("--smoke", action="store_true", help="check the runs, the files and a rebuilt table; one line of summary")
     p.add_argument("extra", nargs="*")
     a = p.parse_args()
     if a.count < 1:
@@ -271,6 +302,8 @@ def main():
             f.write(content)
         os.replace(tmp, os.path.join(a.out, name))
     print(text)
+    if a.smoke:
+        check(a.out, a.count, rows, text)
 
 
 if __name__ == "__main__":

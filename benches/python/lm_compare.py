@@ -5,15 +5,23 @@ wrote: a numpy implementation of the same trainlm loop, scipy's MINPACK
 conjugate-gradient solves; on the 4-25-4 net that is 4x faster per iteration than its
 materialised-Jacobian Cholesky option, whose jax.jacfwd Jacobian dominates).
 Every peer runs from the same start until the test MSE reaches 1e-5 (target units²) or its
-time budget ends; prints all of them beside neurarm's runs, per problem.
+time budget ends (or, for all of them, after the epochs the bench's settings allow); prints all of
+them beside neurarm's runs, per problem.
 
-usage: lm_compare.py [--budget SECONDS] BENCH.json...   (e.g. target/lm-bench/gravity4.json)"""
+Checks that the numpy loop, the same algorithm as neurarm's trainlm, reproduces the test MSE
+neurarm's trainlm reached after each of its first epochs (to a relative 1e-8), and that every
+time, ratio and final error is a finite positive number.
+
+usage: lm_compare.py [--budget SECONDS] [--peers numpy,scipy,jaxopt] [--smoke] BENCH.json...
+(e.g. target/lm-bench/gravity4.json; --smoke: one line of summary at the end)"""
 import argparse
 import json
 import time
 
 import numpy as np
 from scipy.optimize import least_squares
+
+from bench_checks import agree, fail, positive
 
 TARGET = 1e-5
 
@@ -78,7 +86,8 @@ class Clock:
         return time.perf_counter() - self.t0 - self.excluded
 
 
-def numpy_trainlm(pb, max_epochs, budget):
+def numpy_trainlm(pb, max_epochs, budget, min_epochs=0):
+    """The trainlm loop; past the budget it stops, but not before `min_epochs` epochs."""
     s = pb.s
     theta = pb.theta0.copy()
     mu = s["mu"]
@@ -106,7 +115,7 @@ def numpy_trainlm(pb, max_epochs, budget):
                 break
             mu *= s["mu_inc"]
         epochs = epoch
-        if clock.record(theta) <= TARGET or not improved or clock.elapsed() > budget:
+        if clock.record(theta) <= TARGET or not improved or (clock.elapsed() > budget and epoch >= min_epochs):
             break
     return epochs, clock.elapsed(), clock.history
 
@@ -181,40 +190,83 @@ def first_below(history):
     return next(((it, t) for t, m, it in history if m <= TARGET), (None, None))
 
 
-def compare(path, budget):
+PEERS = {"numpy": ("numpy trainlm loop", numpy_trainlm), "scipy": ("scipy MINPACK lm", scipy_lm),
+         "jaxopt": ("jaxopt LM (x64 CPU)", jaxopt_lm)}
+
+
+def check_numpy_is_trainlm(data, history):
+    """The numpy loop's test MSE after each epoch is neurarm trainlm's (same data, split, start
+    and algorithm), over the epochs the bench wrote; returns how many were compared and the
+    largest relative difference."""
+    ours = data["trainlm_test_mse_by_epoch"]
+    theirs = [m for _, m, _ in history[: len(ours)]]
+    if len(theirs) < len(ours):
+        fail(f"the numpy loop ran {len(theirs)} epochs, neurarm's trainlm {len(ours)}")
+    worst = agree(f"{data['title']}: test MSE by epoch relative to neurarm trainlm's, numpy loop",
+                  [t / o for t, o in zip(theirs, ours)], [1.0] * len(ours), 1e-8)
+    return len(ours), worst
+
+
+def compare(path, budget, peers):
+    """Runs the peers on one bench file, checks and prints the table; returns the title, the rows
+    and the numpy loop's check (epochs compared, largest relative difference; None without it)."""
     data = json.loads(open(path).read())
     pb = Problem(data)
     max_iter = pb.s["epochs"]
-    rows = []
+    rows, checked = [], None
     for run in data["neurarm"]:
         label = f"neurarm {run['damping']}"
         rows.append((label, run["seconds_per_epoch"], run["epochs_to_test_mse_1e-5"], run["seconds_to_test_mse_1e-5"], run["final_test_mse"], run["epochs"], run["seconds"]))
-    for name, fn in [("numpy trainlm loop", numpy_trainlm), ("scipy MINPACK lm", scipy_lm), ("jaxopt LM (x64 CPU)", jaxopt_lm)]:
-        its, total, hist = fn(pb, max_iter, budget)
+    for peer in peers:
+        name, fn = PEERS[peer]
+        if peer == "numpy":  # not stopped by the budget before the epochs it is checked over
+            its, total, hist = fn(pb, max_iter, budget, len(data["trainlm_test_mse_by_epoch"]))
+        else:
+            its, total, hist = fn(pb, max_iter, budget)
         it_to, t_to = first_below(hist)
         final = hist[-1][1] if hist else pb.test_mse(pb.theta0)
         rows.append((name, total / max(its, 1), it_to, t_to, final, its, total))
+        if peer == "numpy":
+            checked = check_numpy_is_trainlm(data, hist)
+    for name, per, _, _, final, _, total in rows:
+        positive(f"{data['title']}: {name}'s seconds per iteration", per)
+        positive(f"{data['title']}: {name}'s final test MSE", final)
+        positive(f"{data['title']}: {name}'s seconds", total)
     fmt = lambda v, f: "never" if v is None else f.format(v)
     print(f"\n{data['title']}, same data, split and start ({pb.q} train / {len(pb.Xt)} test samples, {pb.P} weights):")
     print(f"{'trainer':<36}{'s/iteration':>12}{'its to 1e-5':>12}{'s to 1e-5':>11}{'final test MSE':>16}{'its run':>9}{'s run':>9}")
     for name, per, it_to, t_to, final, its, total in rows:
         print(f"{name:<36}{per:>12.5f}{fmt(it_to, '{}'):>12}{fmt(t_to, '{:.3f}'):>11}{final:>16.3e}{its:>9}{total:>9.2f}")
-    jax_to = rows[-1][3]
-    for name, _, _, t_to, *_ in rows[: len(data["neurarm"])]:
-        if jax_to is not None and t_to is not None:
-            print(f"time to test MSE 1e-5, jaxopt / {name}: {jax_to / t_to:.1f}x (target >= 10x)")
-        else:
-            print(f"time to test MSE 1e-5, jaxopt / {name}: not comparable (one of them never reached 1e-5)")
-    numpy_per = rows[len(data["neurarm"])][1]
-    print(f"epoch speed-up vs numpy: {numpy_per / rows[0][1]:.1f}x")
+    by_peer = dict(zip(peers, rows[len(data["neurarm"]):]))
+    if "jaxopt" in by_peer:
+        jax_to = by_peer["jaxopt"][3]
+        for name, _, _, t_to, *_ in rows[: len(data["neurarm"])]:
+            if jax_to is not None and t_to is not None:
+                print(f"time to test MSE 1e-5, jaxopt / {name}: {jax_to / t_to:.1f}x (target >= 10x)")
+            else:
+                print(f"time to test MSE 1e-5, jaxopt / {name}: not comparable (one of them never reached 1e-5)")
+    if "numpy" in by_peer:
+        print(f"epoch speed-up vs numpy: {positive('epoch speed-up vs numpy', by_peer['numpy'][1] / rows[0][1]):.1f}x")
     print("(iterations: epochs for trainlm loops, Jacobian evaluations for scipy, update() calls")
     print(" (taken or rejected steps) for jaxopt; peers stop at the target or after the budget)")
+    if checked is not None:
+        print(f"the numpy loop retraces neurarm's trainlm: its test MSE after each of the first {checked[0]} epochs "
+              f"within a relative {checked[1]:.1e}")
+    return data["title"], rows, checked
 
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()
     ap.add_argument("--budget", type=float, default=300.0, help="seconds per peer run")
+    ap.add_argument("--peers", default="numpy,scipy,jaxopt", help="comma-separated, of numpy, scipy, jaxopt")
+    ap.add_argument("--smoke", action="store_true", help="a one-line summary at the end")
     ap.add_argument("files", nargs="+")
     args = ap.parse_args()
-    for f in args.files:
-        compare(f, args.budget)
+    peers = args.peers.split(",")
+    if not peers or any(p not in PEERS for p in peers):
+        ap.error(f"--peers: a comma-separated list of {', '.join(PEERS)}")
+    results = [compare(f, args.budget, peers) for f in args.files]
+    if args.smoke:
+        retraced = [c for _, _, c in results if c is not None]
+        print(f"bench-lm smoke: OK ({', '.join(peers)} beside neurarm on {len(results)} problems"
+              + "".join(f"; numpy loop = trainlm over {n} epochs to {w:.0e}" for n, w in retraced) + ")")

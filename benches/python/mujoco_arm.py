@@ -66,6 +66,17 @@ def time_per_step(friction: bool, steps: int = 1000, repeats: int = 200) -> floa
     return float(np.median(samples))
 
 
+def states(steps: int, friction: bool = False):
+    """q [rad] and q̇ [rad/s] at the start and after each of `steps` steps: rows of 8."""
+    model, data = make(friction)
+    reset(model, data)
+    rows = [[*data.qpos, *data.qvel]]
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+        rows.append([*data.qpos, *data.qvel])
+    return np.array(rows)
+
+
 def trajectory(path: str, seconds: float = 2.0):
     model, data = make(False)
     reset(model, data)
