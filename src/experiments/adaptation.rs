@@ -17,10 +17,11 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use neurarm_cosim::{ConnectionSpec, EventSpec, SystemSpec, Value};
+use neurarm_models::names::{self, all_joints, joint_path, joint_paths, path};
 use neurarm_models::AdaptationLaw;
 use serde::Serialize;
 
-use super::{LoopRun, Settings};
+use super::{LoopRun, Settings, ARM_UNIT, COMPENSATOR_UNIT, CONTROLLER_UNIT};
 
 /// Sizes and strengths of the adaptation runs.
 #[derive(Clone, Debug, Serialize)]
@@ -104,8 +105,8 @@ impl Compensators<'_> {
 fn drift_event(unit: &str, joints: usize, a: &AdaptationSettings) -> EventSpec {
     let mut set = BTreeMap::new();
     for i in 1..=joints {
-        set.insert(format!("{unit}.viscous_scale_{i}"), Value::Real(a.viscous_scale));
-        set.insert(format!("{unit}.coulomb_scale_{i}"), Value::Real(a.coulomb_scale));
+        set.insert(joint_path(unit, names::VISCOUS_SCALE, i), Value::Real(a.viscous_scale));
+        set.insert(joint_path(unit, names::COULOMB_SCALE, i), Value::Real(a.coulomb_scale));
     }
     EventSpec { time: 0.0, until: Some(a.drift_ramp_s), set }
 }
@@ -114,16 +115,22 @@ fn drift_event(unit: &str, joints: usize, a: &AdaptationSettings) -> EventSpec {
 /// perfect case, to its compensator; the adaptive case learns from the controller's `s_i`.
 fn as_case(mut spec: SystemSpec, case: usize, joints: usize, events: &dyn Fn(&str) -> EventSpec, stop: f64) -> SystemSpec {
     spec.simulation.stop = stop;
-    spec.event.push(events("arm"));
+    spec.event.push(events(ARM_UNIT));
     if case == 0 {
-        spec.event.push(events("comp"));
+        spec.event.push(events(COMPENSATOR_UNIT));
     }
     if case == 2 {
-        spec.connection.push(ConnectionSpec { from: "ctl.s_*".into(), to: "comp.s_*".into() });
-        spec.simulation.record.extend((1..=joints).map(|i| format!("comp.adapted_friction_{i}")));
-        spec.simulation.record.extend((1..=joints).map(|i| format!("comp.adapted_gravity_{i}")));
+        spec.connection.push(learning_connection());
+        spec.simulation.record.extend(joint_paths(COMPENSATOR_UNIT, names::ADAPTED_FRICTION, joints));
+        spec.simulation.record.extend(joint_paths(COMPENSATOR_UNIT, names::ADAPTED_GRAVITY, joints));
     }
     spec
+}
+
+/// The controller's learning signal to the adaptive compensator, every joint.
+fn learning_connection() -> ConnectionSpec {
+    let every = |unit: &str| path(unit, &all_joints(names::LEARNING_SIGNAL));
+    ConnectionSpec { from: every(CONTROLLER_UNIT), to: every(COMPENSATOR_UNIT) }
 }
 
 /// The friction-drift run of `case` (0 to 3, see [`CASES`]): the tracking loop on `arm` from
@@ -156,8 +163,8 @@ pub fn steady_system(
     let mut spec = super::tracking_system(arm, task, comps.of(case), start, settings);
     spec.simulation.stop = settings.adaptation.steady_duration_s;
     if case == 2 {
-        spec.connection.push(ConnectionSpec { from: "ctl.s_*".into(), to: "comp.s_*".into() });
-        spec.simulation.record.extend((1..=joints).map(|i| format!("comp.adapted_friction_{i}")));
+        spec.connection.push(learning_connection());
+        spec.simulation.record.extend(joint_paths(COMPENSATOR_UNIT, names::ADAPTED_FRICTION, joints));
     }
     spec
 }
@@ -176,12 +183,12 @@ pub fn payload_system(
     let a = &settings.adaptation;
     let joints = gains.len();
     let mut spec = super::gravity_compensation_system(arm, joint, comps.of(case), gains, settings);
-    let ctl = spec.fmu.iter_mut().find(|f| f.name == "ctl").expect("the loop has a controller");
-    ctl.parameters.insert("repeat_sequence".into(), Value::Boolean(true));
+    let ctl = spec.fmu.iter_mut().find(|f| f.name == CONTROLLER_UNIT).expect("the loop has a controller");
+    ctl.parameters.insert(names::REPEAT_SEQUENCE.into(), Value::Boolean(true));
     let event = |unit: &str| EventSpec {
         time: a.payload_time_s,
         until: None,
-        set: BTreeMap::from([(format!("{unit}.payload_mass"), Value::Real(payload_kg))]),
+        set: BTreeMap::from([(path(unit, names::PAYLOAD_MASS), Value::Real(payload_kg))]),
     };
     as_case(spec, case, joints, &event, a.payload_duration_s)
 }
@@ -189,7 +196,8 @@ pub fn payload_system(
 /// Mean over samples and both coordinates of (x_d − x)² of the rows with `from ≤ t ≤ to`,
 /// from the controller's (measured) error, as Table 1 [m²].
 pub fn tracking_mse_between(run: &LoopRun, from: f64, to: f64) -> f64 {
-    let (t, ex, ey) = (column(run, "time"), column(run, "ctl.error_x"), column(run, "ctl.error_y"));
+    let (ex, ey) = (column(run, &path(CONTROLLER_UNIT, names::ERROR_X)), column(run, &path(CONTROLLER_UNIT, names::ERROR_Y)));
+    let t = column(run, "time");
     let (sum, count) = (0..t.len())
         .filter(|&k| t[k] >= from - 1e-9 && t[k] <= to + 1e-9)
         .fold((0.0, 0usize), |(s, c), k| (s + ex[k] * ex[k] + ey[k] * ey[k], c + 1));
@@ -204,6 +212,12 @@ fn column(run: &LoopRun, name: &str) -> Vec<f64> {
     run.column(name).unwrap_or_default()
 }
 
+/// Each joint's recorded target and angle in a joint-space run: (q_target, q) [rad].
+fn targets_and_angles(run: &LoopRun, joints: usize) -> Vec<(Vec<f64>, Vec<f64>)> {
+    let of = |unit: &str, family: &str, j: usize| column(run, &joint_path(unit, family, j));
+    (1..=joints).map(|j| (of(CONTROLLER_UNIT, names::TARGET_ANGLE, j), of(ARM_UNIT, names::ANGLE, j))).collect()
+}
+
 /// The tracking MSE in consecutive windows of `width` [s]: (window centre [s], MSE [m²]).
 pub fn windowed_tracking_mse(run: &LoopRun, width: f64) -> Vec<(f64, f64)> {
     let end = run.rows.last().map_or(0.0, |r| r[0]);
@@ -215,11 +229,9 @@ pub fn windowed_tracking_mse(run: &LoopRun, width: f64) -> Vec<(f64, f64)> {
 /// (window centre [s], mean of (q_target − q)² [rad²]).
 pub fn windowed_joint_mse(run: &LoopRun, joints: usize, width: f64) -> Vec<(f64, f64)> {
     let t = column(run, "time");
-    let errors: Vec<Vec<f64>> = (1..=joints)
-        .map(|i| {
-            let (target, q) = (column(run, &format!("ctl.q_target_{i}")), column(run, &format!("arm.q_{i}")));
-            target.iter().zip(&q).map(|(a, b)| (a - b).powi(2)).collect()
-        })
+    let errors: Vec<Vec<f64>> = targets_and_angles(run, joints)
+        .into_iter()
+        .map(|(target, q)| target.iter().zip(&q).map(|(a, b)| (a - b).powi(2)).collect())
         .collect();
     let end = t.last().copied().unwrap_or(0.0);
     let windows = (end / width).floor() as usize;
@@ -247,9 +259,9 @@ pub fn settled_errors_after(run: &LoopRun, joints: usize, from: f64) -> Vec<f64>
             settled && segment_start >= from - 1e-9
         })
         .collect();
-    (1..=joints)
-        .map(|i| {
-            let (target, q) = (column(run, &format!("ctl.q_target_{i}")), column(run, &format!("arm.q_{i}")));
+    targets_and_angles(run, joints)
+        .into_iter()
+        .map(|(target, q)| {
             let (sum, count) = (0..t.len()).filter(|&k| keep[k]).fold((0.0, 0usize), |(s, c), k| (s + (target[k] - q[k]).abs(), c + 1));
             if count == 0 {
                 f64::NAN
@@ -265,8 +277,7 @@ pub fn settled_errors_after(run: &LoopRun, joints: usize, from: f64) -> Vec<f64>
 pub fn settled_error_per_segment(run: &LoopRun, joints: usize) -> Vec<(f64, f64)> {
     let t = column(run, "time");
     let segment = neurarm_models::joint::SEQUENCE_SEGMENT_S;
-    let errors: Vec<(Vec<f64>, Vec<f64>)> =
-        (1..=joints).map(|i| (column(run, &format!("ctl.q_target_{i}")), column(run, &format!("arm.q_{i}")))).collect();
+    let errors = targets_and_angles(run, joints);
     let end = t.last().copied().unwrap_or(0.0);
     let segments = (end / segment + 1e-9).floor() as usize;
     (0..segments)
@@ -279,16 +290,17 @@ pub fn settled_error_per_segment(run: &LoopRun, joints: usize) -> Vec<(f64, f64)
         .collect()
 }
 
-/// The largest of the recorded `comp.adapted_friction_i` (or `_gravity_`) over a run [N·m];
-/// NaN for a run without rows.
-pub fn largest_adaptation(run: &LoopRun, part: &str) -> f64 {
+/// The largest of the recorded `comp.<family>_i` over a run [N·m], `family` being
+/// [`names::ADAPTED_FRICTION`] or [`names::ADAPTED_GRAVITY`]; NaN for a run without rows.
+pub fn largest_adaptation(run: &LoopRun, family: &str) -> f64 {
     if run.rows.is_empty() {
         return f64::NAN;
     }
+    let prefix = path(COMPENSATOR_UNIT, &names::joint_prefix(family));
     run.columns
         .iter()
         .enumerate()
-        .filter(|(_, c)| c.starts_with(&format!("comp.adapted_{part}_")))
+        .filter(|(_, c)| c.starts_with(&prefix))
         .flat_map(|(k, _)| run.rows.iter().map(move |r| r[k]))
         .fold(0.0, f64::max)
 }

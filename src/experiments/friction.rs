@@ -6,10 +6,11 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use nalgebra::DMatrix;
 
-use super::{identification_internal_step, joint_loop, lightest_inertias, real_handles, Settings};
+use super::{identification_internal_step, joint_loop, lightest_inertias, real_handles, Settings, ARM_UNIT, CONTROLLER_UNIT};
 pub use crate::identify::FrictionCurve;
 use crate::identify::{identify_levels, judge_level, FrictionIdentification, FrictionOptions, Level, Verdict};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_models::names;
 use neurarm_nn::encoding::LOG_SPEED_SCALE_RAD_S;
 use neurarm_nn::{train, EncodedNet, InputEncoding, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::arm::{coriolis_of_one_joint_into, mass_matrix_into, ArmData, ArmParams, JointFriction};
@@ -209,12 +210,13 @@ impl FrictionRig {
         let mut gains = if rigid { vec![(0.0, 0.0); n] } else { hold_gains(model) };
         gains[joint] = (0.0, 0.0);
         // Friction is identified with the arm horizontal, whatever its configured base angle.
-        let parameters = [("internal_step", Value::Real(identification_internal_step(model))), ("base_angle", Value::Real(0.0))];
+        let parameters = [(names::INTERNAL_STEP, Value::Real(identification_internal_step(model))), (names::BASE_ANGLE, Value::Real(0.0))];
         let mut s = joint_loop(arm_fmu, controller, &parameters, &gains, None)?;
-        s.set("ctl", "use_sequence", Value::Boolean(false))?;
+        s.set(CONTROLLER_UNIT, names::USE_SEQUENCE, Value::Boolean(false))?;
         let sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[])?;
-        let torque_inputs = real_handles(&sim, n, "ctl.tau_comp")?;
-        let state = [real_handles(&sim, n, "arm.q_meas")?, real_handles(&sim, n, "arm.qd_meas")?].concat();
+        let torque_inputs = real_handles(&sim, n, CONTROLLER_UNIT, names::COMPENSATION_TORQUE)?;
+        let state =
+            [real_handles(&sim, n, ARM_UNIT, names::MEASURED_ANGLE)?, real_handles(&sim, n, ARM_UNIT, names::MEASURED_VELOCITY)?].concat();
         let rigid_body = model.clone().with_base_angle(0.0).frictionless();
         let data = ArmData::new(&rigid_body);
         Ok(Self {
@@ -582,11 +584,11 @@ pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_
         }
     }
     let (_, settings, trained) = best.expect("at least one start");
-    let name = format!("{}", joint + 1);
+    // Named as the compensator's ports the net feeds.
     Ok(WeightsFile::new(
         &trained.net,
-        vec![Signal { name: format!("qd_{name}"), unit: "rad/s".into() }],
-        vec![Signal { name: format!("tau_friction_{name}"), unit: "N.m".into() }],
+        vec![Signal { name: names::joint(names::VELOCITY, joint + 1), unit: "rad/s".into() }],
+        vec![Signal { name: names::joint(names::FRICTION_TORQUE, joint + 1), unit: "N.m".into() }],
         settings,
         trained.report,
     )

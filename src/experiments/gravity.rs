@@ -10,9 +10,10 @@ use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};
 
 use super::friction::FrictionCurve;
-use super::{identification_internal_step, joint_loop, parallel, real_handles, GravityDesign, Settings};
+use super::{identification_internal_step, joint_loop, parallel, real_handles, GravityDesign, Settings, ARM_UNIT, CONTROLLER_UNIT};
 use crate::identify::{gravity_pair, GravityCorrection, GravityMeasurement, GravityOptions, PassFault, PassWindow};
 use neurarm_cosim::{Algorithm, Handle, Simulation, Value};
+use neurarm_models::names;
 use neurarm_nn::{train, EpochInfo, InputEncoding, Signal, TrainSettings, WeightsFile};
 use neurarm_physics::arm::{gravity_torques, ArmData, ArmParams};
 use neurarm_physics::control::holds::gravity_hold_torques_into;
@@ -277,20 +278,23 @@ impl SweepRig {
     /// The loop for `model`'s arm in `arm_fmu`, starting at the angles `first` [rad].
     fn new(arm_fmu: &Path, controller: &Path, model: &ArmParams, first: &[f64], settings: &Settings) -> Result<Self> {
         let n = model.dof();
-        let mut parameters: Vec<(String, Value)> =
-            vec![("base_angle".into(), Value::Real(PI / 2.0)), ("internal_step".into(), Value::Real(identification_internal_step(model)))];
+        let mut parameters: Vec<(String, Value)> = vec![
+            (names::BASE_ANGLE.into(), Value::Real(PI / 2.0)),
+            (names::INTERNAL_STEP.into(), Value::Real(identification_internal_step(model))),
+        ];
         for (i, q) in first.iter().enumerate() {
-            parameters.push((format!("q0_{}", i + 1), Value::Real(*q)));
+            parameters.push((names::joint(names::START_ANGLE, i + 1), Value::Real(*q)));
         }
         let p: Vec<(&str, Value)> = parameters.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
         let mut s = joint_loop(arm_fmu, controller, &p, &vec![(0.0, 0.0); n], None)?;
-        s.set("ctl", "use_sequence", Value::Boolean(false))?;
+        s.set(CONTROLLER_UNIT, names::USE_SEQUENCE, Value::Boolean(false))?;
         let sim = s.initialize(0.0, settings.step, Algorithm::GaussSeidel, &[])?;
-        let reference = [real_handles(&sim, n, "ctl.q_ref")?, real_handles(&sim, n, "ctl.qd_ref")?].concat();
-        let measured =
-            [real_handles(&sim, n, "arm.q_meas")?, real_handles(&sim, n, "ctl.tau")?, real_handles(&sim, n, "arm.qd_meas")?].concat();
-        let state = [real_handles(&sim, n, "arm.q_meas")?, real_handles(&sim, n, "arm.qd_meas")?].concat();
-        let hold_torque = real_handles(&sim, n, "ctl.tau_comp")?;
+        let handles = |unit: &str, family: &str| real_handles(&sim, n, unit, family);
+        let reference = [handles(CONTROLLER_UNIT, names::REFERENCE_ANGLE)?, handles(CONTROLLER_UNIT, names::REFERENCE_VELOCITY)?].concat();
+        let (angles, speeds) = (handles(ARM_UNIT, names::MEASURED_ANGLE)?, handles(ARM_UNIT, names::MEASURED_VELOCITY)?);
+        let measured = [angles.clone(), handles(CONTROLLER_UNIT, names::TORQUE)?, speeds.clone()].concat();
+        let state = [angles, speeds].concat();
+        let hold_torque = handles(CONTROLLER_UNIT, names::COMPENSATION_TORQUE)?;
         let rigid_body = model.clone().with_base_angle(0.0).frictionless();
         let data = ArmData::new(&rigid_body);
         Ok(Self {
@@ -424,8 +428,9 @@ pub fn train_gravity_net(
         ..TrainSettings::default()
     };
     let trained = train(&x, &t, &train_settings, on_epoch).context("gravity net")?;
-    let signals = |prefix: &str, unit: &str| (0..n).map(|i| Signal { name: format!("{prefix}_{}", i + 1), unit: unit.into() }).collect();
-    Ok(WeightsFile::new(&trained.net, signals("q", "rad"), signals("tau_gravity", "N.m"), train_settings, trained.report)
+    // Named as the compensator's ports the net feeds.
+    let signals = |family: &str, unit: &str| (1..=n).map(|j| Signal { name: names::joint(family, j), unit: unit.into() }).collect();
+    Ok(WeightsFile::new(&trained.net, signals(names::ANGLE, "rad"), signals(names::GRAVITY_TORQUE, "N.m"), train_settings, trained.report)
         .with_encoding(encoding)
         .gravity())
 }

@@ -6,8 +6,9 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use neurarm_cosim::{SystemSpec, Value};
+use neurarm_models::names::{self, joint_path, joint_paths};
 
-use super::{closed_loop, LoopRun, Settings};
+use super::{closed_loop, LoopRun, Settings, ARM_UNIT, CONTROLLER_UNIT};
 
 /// The joint-space loop as a system: the `joints`-joint arm with its base turned 90° starting
 /// at the hanging pose, the joint controller on its built-in sequence (joint i follows column
@@ -21,17 +22,20 @@ pub fn gravity_compensation_system(
     settings: &Settings,
 ) -> SystemSpec {
     let n = gains.len();
-    let arm_parameters = BTreeMap::from([("base_angle".to_owned(), Value::Real(PI / 2.0)), ("q0_1".to_owned(), Value::Real(-PI / 2.0))]);
+    let arm_parameters = BTreeMap::from([
+        (names::BASE_ANGLE.to_owned(), Value::Real(PI / 2.0)),
+        (names::joint(names::START_ANGLE, 1), Value::Real(-PI / 2.0)),
+    ]);
     let mut parameters = BTreeMap::new();
     for (i, (kp, kd)) in gains.iter().enumerate() {
-        parameters.insert(format!("kp_{}", i + 1), Value::Real(*kp));
-        parameters.insert(format!("kd_{}", i + 1), Value::Real(*kd));
+        parameters.insert(names::joint(names::KP, i + 1), Value::Real(*kp));
+        parameters.insert(names::joint(names::KD, i + 1), Value::Real(*kd));
     }
     let mut spec = closed_loop(arm, controller, compensator, arm_parameters, parameters);
-    let mut record: Vec<String> = (1..=n).map(|i| format!("ctl.q_target_{i}")).collect();
-    record.extend((1..=n).map(|i| format!("arm.q_{i}")));
-    record.extend((1..=n).map(|i| format!("ctl.tau_{i}")));
-    record.extend((1..=n).map(|i| format!("arm.qd_{i}")));
+    let mut record = joint_paths(CONTROLLER_UNIT, names::TARGET_ANGLE, n);
+    record.extend(joint_paths(ARM_UNIT, names::ANGLE, n));
+    record.extend(joint_paths(CONTROLLER_UNIT, names::TORQUE, n));
+    record.extend(joint_paths(ARM_UNIT, names::VELOCITY, n));
     spec.simulation.stop = neurarm_models::joint::SEQUENCE_SEGMENT_S * neurarm_models::joint::JOINT_SEQUENCE.len() as f64;
     spec.simulation.step = settings.step;
     spec.simulation.record = record;
@@ -42,8 +46,8 @@ pub fn gravity_compensation_system(
 pub fn joint_rms_errors(run: &LoopRun, joints: usize) -> Vec<f64> {
     (1..=joints)
         .map(|i| {
-            let t = run.column(&format!("ctl.q_target_{i}")).unwrap_or_default();
-            let q = run.column(&format!("arm.q_{i}")).unwrap_or_default();
+            let t = run.column(&joint_path(CONTROLLER_UNIT, names::TARGET_ANGLE, i)).unwrap_or_default();
+            let q = run.column(&joint_path(ARM_UNIT, names::ANGLE, i)).unwrap_or_default();
             (t.iter().zip(&q).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / t.len().max(1) as f64).sqrt()
         })
         .collect()
@@ -58,8 +62,8 @@ pub fn joint_settled_errors(run: &LoopRun, joints: usize) -> Vec<f64> {
         time.iter().map(|t| t.rem_euclid(segment) >= segment - 0.5 || (*t > 0.0 && t.rem_euclid(segment) == 0.0)).collect();
     (1..=joints)
         .map(|i| {
-            let t = run.column(&format!("ctl.q_target_{i}")).unwrap_or_default();
-            let q = run.column(&format!("arm.q_{i}")).unwrap_or_default();
+            let t = run.column(&joint_path(CONTROLLER_UNIT, names::TARGET_ANGLE, i)).unwrap_or_default();
+            let q = run.column(&joint_path(ARM_UNIT, names::ANGLE, i)).unwrap_or_default();
             let (sum, count) =
                 t.iter().zip(&q).zip(&settled).filter(|(_, &s)| s).fold((0.0, 0usize), |(s, c), ((a, b), _)| (s + (a - b).abs(), c + 1));
             sum / count.max(1) as f64

@@ -29,6 +29,7 @@ use crate::export::export_fmu_for;
 use neurarm_cosim::{
     Algorithm, ConnectionSpec, FmuEntry, Handle, MasterError, RunEnd, Simulation, SimulationSpec, System, SystemSpec, Value,
 };
+use neurarm_models::names::{self, all_joints, path};
 use neurarm_models::{
     FmuSpec, IdealCompensatorSpec, JointControllerSpec, ModelSpec, NnCompensatorSpec, PlanarArmSpec, TaskSpaceControllerSpec,
 };
@@ -47,6 +48,13 @@ pub use paper::LOW_SPEED_RANGE_RAD_S;
 pub use progress::{NoProgress, Progress};
 pub use settings::{emulated_real_arm, Arms, GravityDesign, RealOrigin, Settings, MAX_GRAVITY_POSES, MAX_JOINTS, MIN_JOINTS};
 pub use tracking::{tracking_errors, tracking_mse, tracking_start, tracking_system, TrackingErrors, TRACKING_SEED_POSE};
+
+/// The arm's unit in the closed loops' systems.
+pub const ARM_UNIT: &str = "arm";
+/// The controller's unit in the closed loops' systems.
+pub const CONTROLLER_UNIT: &str = "ctl";
+/// The compensator's unit in the closed loops' systems.
+pub const COMPENSATOR_UNIT: &str = "comp";
 
 /// Longest RK4 sub-step of the arm in the identification runs [s]: one per 1 ms communication
 /// step. Their motions are slow and smooth (PD loops at 40 rad/s, constant speeds), where RK4
@@ -285,29 +293,47 @@ pub(crate) fn joint_loop(
     compensator: Option<&Path>,
 ) -> Result<System, MasterError> {
     let mut s = System::new();
-    s.add_fmu("arm", arm_fmu)?.add_fmu("ctl", controller)?;
+    s.add_fmu(ARM_UNIT, arm_fmu)?.add_fmu(CONTROLLER_UNIT, controller)?;
     for (name, v) in arm_parameters {
-        s.set("arm", name, v.clone())?;
+        s.set(ARM_UNIT, name, v.clone())?;
     }
     for (i, (kp, kd)) in kp_kd.iter().enumerate() {
-        s.set("ctl", &format!("kp_{}", i + 1), Value::Real(*kp))?;
-        s.set("ctl", &format!("kd_{}", i + 1), Value::Real(*kd))?;
+        s.set(CONTROLLER_UNIT, &names::joint(names::KP, i + 1), Value::Real(*kp))?;
+        s.set(CONTROLLER_UNIT, &names::joint(names::KD, i + 1), Value::Real(*kd))?;
     }
-    s.connect("arm.q_meas_*", "ctl.q_*")?;
-    s.connect("arm.qd_meas_*", "ctl.qd_*")?;
-    s.connect("ctl.tau_*", "arm.tau_*")?;
     if let Some(c) = compensator {
-        s.add_fmu("comp", c)?;
-        s.connect("arm.q_meas_*", "comp.q_*")?;
-        s.connect("arm.qd_meas_*", "comp.qd_*")?;
-        s.connect("comp.tau_comp_*", "ctl.tau_comp_*")?;
+        s.add_fmu(COMPENSATOR_UNIT, c)?;
+    }
+    for (from, to) in loop_connections(compensator.is_some()) {
+        s.connect(&from, &to)?;
     }
     Ok(s)
 }
 
-/// The handles of the Real variables `<prefix>_1` … `<prefix>_n` ("unit.variable") of `sim`.
-pub(crate) fn real_handles(sim: &Simulation, n: usize, prefix: &str) -> Result<Vec<Handle>, MasterError> {
-    (0..n).map(|i| sim.real_handle(&format!("{prefix}_{}", i + 1))).collect()
+/// The connections (from, to) of every closed loop: the arm's measurements to the controller,
+/// its torques to the arm and, with a compensator, the measurements to the compensator and its
+/// torques to the controller's `tau_comp`.
+fn loop_connections(compensator: bool) -> Vec<(String, String)> {
+    let every = |unit: &str, family: &str| path(unit, &all_joints(family));
+    let (arm, ctl, comp) = (ARM_UNIT, CONTROLLER_UNIT, COMPENSATOR_UNIT);
+    let mut connections = vec![
+        (every(arm, names::MEASURED_ANGLE), every(ctl, names::ANGLE)),
+        (every(arm, names::MEASURED_VELOCITY), every(ctl, names::VELOCITY)),
+        (every(ctl, names::TORQUE), every(arm, names::TORQUE)),
+    ];
+    if compensator {
+        connections.extend([
+            (every(arm, names::MEASURED_ANGLE), every(comp, names::ANGLE)),
+            (every(arm, names::MEASURED_VELOCITY), every(comp, names::VELOCITY)),
+            (every(comp, names::COMPENSATION_TORQUE), every(ctl, names::COMPENSATION_TORQUE)),
+        ]);
+    }
+    connections
+}
+
+/// The handles of the Real variables of `family` of joints 1 … n of `unit` in `sim`.
+pub(crate) fn real_handles(sim: &Simulation, n: usize, unit: &str, family: &str) -> Result<Vec<Handle>, MasterError> {
+    names::joint_paths(unit, family, n).iter().map(|p| sim.real_handle(p)).collect()
 }
 
 /// A recorded closed-loop run.
@@ -335,8 +361,8 @@ impl LoopRun {
             .iter()
             .enumerate()
             .filter_map(|(k, c)| {
-                let is_speed = c.starts_with("arm.qd_");
-                (is_speed || c.starts_with("arm.q_")).then_some((k, is_speed))
+                let is_speed = c.starts_with(&path(ARM_UNIT, &names::joint_prefix(names::VELOCITY)));
+                (is_speed || c.starts_with(&path(ARM_UNIT, &names::joint_prefix(names::ANGLE)))).then_some((k, is_speed))
             })
             .collect();
         for row in &self.rows {
@@ -366,20 +392,14 @@ pub(crate) fn closed_loop(
     arm_parameters: BTreeMap<String, Value>,
     controller_parameters: BTreeMap<String, Value>,
 ) -> SystemSpec {
-    let connect = |from: &str, to: &str| ConnectionSpec { from: from.into(), to: to.into() };
     let mut fmu = vec![
-        FmuEntry { name: "arm".into(), path: spec_path(arm), parameters: arm_parameters },
-        FmuEntry { name: "ctl".into(), path: spec_path(controller), parameters: controller_parameters },
+        FmuEntry { name: ARM_UNIT.into(), path: spec_path(arm), parameters: arm_parameters },
+        FmuEntry { name: CONTROLLER_UNIT.into(), path: spec_path(controller), parameters: controller_parameters },
     ];
-    let mut connection = vec![connect("arm.q_meas_*", "ctl.q_*"), connect("arm.qd_meas_*", "ctl.qd_*"), connect("ctl.tau_*", "arm.tau_*")];
     if let Some(c) = compensator {
-        fmu.push(FmuEntry { name: "comp".into(), path: spec_path(c), parameters: BTreeMap::new() });
-        connection.extend([
-            connect("arm.q_meas_*", "comp.q_*"),
-            connect("arm.qd_meas_*", "comp.qd_*"),
-            connect("comp.tau_comp_*", "ctl.tau_comp_*"),
-        ]);
+        fmu.push(FmuEntry { name: COMPENSATOR_UNIT.into(), path: spec_path(c), parameters: BTreeMap::new() });
     }
+    let connection = loop_connections(compensator.is_some()).into_iter().map(|(from, to)| ConnectionSpec { from, to }).collect();
     SystemSpec {
         fmu,
         connection,

@@ -7,10 +7,11 @@ use std::path::Path;
 use anyhow::{anyhow, Result};
 
 use neurarm_cosim::{SystemSpec, Value};
+use neurarm_models::names::{self, all_joints, joint_paths, path};
 use neurarm_physics::arm::{jacobian, ArmParams, ArmState};
 use neurarm_physics::control::{inverse_kinematics, pseudo_inverse, scaled_reference, ReferencePlacement};
 
-use super::{closed_loop, LoopRun, Settings};
+use super::{closed_loop, LoopRun, Settings, ARM_UNIT, COMPENSATOR_UNIT, CONTROLLER_UNIT};
 
 /// Pose the inverse kinematics for the tracking start is seeded from [rad]: an elbow-up
 /// pose whose links are far from aligned; joint i of an n-joint arm takes entry i mod 4.
@@ -41,26 +42,36 @@ pub fn tracking_system(arm: &Path, controller: &Path, compensator: Option<&Path>
     let n = start.q.len();
     let mut arm_parameters = BTreeMap::new();
     for i in 0..n {
-        arm_parameters.insert(format!("q0_{}", i + 1), Value::Real(start.q[i]));
-        arm_parameters.insert(format!("qd0_{}", i + 1), Value::Real(start.qd[i]));
+        arm_parameters.insert(names::joint(names::START_ANGLE, i + 1), Value::Real(start.q[i]));
+        arm_parameters.insert(names::joint(names::START_VELOCITY, i + 1), Value::Real(start.qd[i]));
     }
     let mut controller_parameters = BTreeMap::new();
     let mut spec = match (settings.intent_horizon, compensator) {
         (Some(horizon), Some(_)) => {
-            controller_parameters.insert("intent_horizon".to_owned(), Value::Real(horizon));
+            controller_parameters.insert(names::INTENT_HORIZON.to_owned(), Value::Real(horizon));
             let mut spec = closed_loop(arm, controller, compensator, arm_parameters, controller_parameters);
-            for c in spec.connection.iter_mut().filter(|c| c.to == "comp.qd_*") {
-                c.from = "ctl.qd_intended_*".into();
+            let speeds = path(COMPENSATOR_UNIT, &all_joints(names::VELOCITY));
+            for c in spec.connection.iter_mut().filter(|c| c.to == speeds) {
+                c.from = path(CONTROLLER_UNIT, &all_joints(names::INTENDED_VELOCITY));
             }
             spec
         }
         _ => closed_loop(arm, controller, compensator, arm_parameters, controller_parameters),
     };
-    let mut record: Vec<String> =
-        ["ctl.error_x", "ctl.error_y", "ctl.x_ref", "ctl.y_ref", "arm.x", "arm.y"].iter().map(|s| s.to_string()).collect();
-    record.extend((1..=n).map(|i| format!("arm.q_{i}")));
-    record.extend((1..=n).map(|i| format!("arm.qd_{i}")));
-    record.extend((1..=n).map(|i| format!("ctl.tau_{i}")));
+    let mut record: Vec<String> = [
+        (CONTROLLER_UNIT, names::ERROR_X),
+        (CONTROLLER_UNIT, names::ERROR_Y),
+        (CONTROLLER_UNIT, names::REFERENCE_X),
+        (CONTROLLER_UNIT, names::REFERENCE_Y),
+        (ARM_UNIT, names::END_EFFECTOR_X),
+        (ARM_UNIT, names::END_EFFECTOR_Y),
+    ]
+    .iter()
+    .map(|(unit, variable)| path(unit, variable))
+    .collect();
+    record.extend(joint_paths(ARM_UNIT, names::ANGLE, n));
+    record.extend(joint_paths(ARM_UNIT, names::VELOCITY, n));
+    record.extend(joint_paths(CONTROLLER_UNIT, names::TORQUE, n));
     spec.simulation.stop = settings.tracking_duration;
     spec.simulation.step = settings.step;
     spec.simulation.record = record;
@@ -100,14 +111,16 @@ pub const RESTING_SPEED_RAD_S: f64 = 1e-3;
 
 /// The errors of a tracking run: against the measured and the true position.
 pub fn tracking_errors(run: &LoopRun) -> TrackingErrors {
-    let col = |name: &str| run.column(name).unwrap_or_default();
-    let (ex, ey) = (col("ctl.error_x"), col("ctl.error_y"));
-    let (xr, yr, x, y) = (col("ctl.x_ref"), col("ctl.y_ref"), col("arm.x"), col("arm.y"));
+    let col = |unit: &str, variable: &str| run.column(&path(unit, variable)).unwrap_or_default();
+    let (ex, ey) = (col(CONTROLLER_UNIT, names::ERROR_X), col(CONTROLLER_UNIT, names::ERROR_Y));
+    let (xr, yr) = (col(CONTROLLER_UNIT, names::REFERENCE_X), col(CONTROLLER_UNIT, names::REFERENCE_Y));
+    let (x, y) = (col(ARM_UNIT, names::END_EFFECTOR_X), col(ARM_UNIT, names::END_EFFECTOR_Y));
     let samples = ex.len();
     let measured_sum: f64 = ex.iter().zip(&ey).map(|(a, b)| a * a + b * b).sum();
     let true_sum: f64 = (0..xr.len().min(x.len())).map(|k| (xr[k] - x[k]).powi(2) + (yr[k] - y[k]).powi(2)).sum();
     let denominator = 2.0 * samples.max(1) as f64;
-    let speeds: Vec<Vec<f64>> = run.columns.iter().filter(|c| c.starts_with("arm.qd_")).filter_map(|c| run.column(c)).collect();
+    let speed = path(ARM_UNIT, &names::joint_prefix(names::VELOCITY));
+    let speeds: Vec<Vec<f64>> = run.columns.iter().filter(|c| c.starts_with(&speed)).filter_map(|c| run.column(c)).collect();
     let resting = (0..samples).filter(|&k| speeds.iter().any(|c| c.get(k).is_some_and(|v| v.abs() < RESTING_SPEED_RAD_S))).count();
     let true_mse = true_sum / denominator;
     TrackingErrors {
@@ -126,7 +139,8 @@ mod tests {
 
     #[test]
     fn the_resting_share_counts_samples_with_any_joint_below_a_milliradian_per_second() {
-        let columns = ["time", "ctl.error_x", "ctl.error_y", "arm.qd_1", "arm.qd_2"].map(String::from).to_vec();
+        let mut columns = vec!["time".to_owned(), path(CONTROLLER_UNIT, names::ERROR_X), path(CONTROLLER_UNIT, names::ERROR_Y)];
+        columns.extend(joint_paths(ARM_UNIT, names::VELOCITY, 2));
         // Samples 1 and 3 have a joint at rest (one each), sample 2 a joint just above it.
         let speeds = [[0.5, -0.2], [0.0, 1.0], [0.5, -1.5e-3], [0.3, 5e-4]];
         let rows = speeds.iter().enumerate().map(|(k, s)| vec![k as f64, 1e-3, -2e-3, s[0], s[1]]).collect();

@@ -10,7 +10,8 @@ use anyhow::Context as _;
 use super::plot::{write_png, Panel, Series, Style};
 use crate::experiments::gravity_study::GravityStudy;
 use crate::experiments::paper::PaperRun;
-use crate::experiments::{GravityDesign, LoopRun};
+use crate::experiments::{GravityDesign, LoopRun, ARM_UNIT, COMPENSATOR_UNIT, CONTROLLER_UNIT};
+use neurarm_models::names::{self, joint_path, path};
 use neurarm_nn::InputEncoding;
 
 /// Most points of a scatter series: more only slows the PNG down.
@@ -39,10 +40,21 @@ fn xy(r: &LoopRun, a: &str, b: &str) -> Vec<(f64, f64)> {
     r.column(a).unwrap_or_default().into_iter().zip(r.column(b).unwrap_or_default()).collect()
 }
 
+/// The recorded columns of the reference and the true end-effector position: x_d, y_d, x, y.
+fn reference_and_position() -> [String; 4] {
+    [
+        path(CONTROLLER_UNIT, names::REFERENCE_X),
+        path(CONTROLLER_UNIT, names::REFERENCE_Y),
+        path(ARM_UNIT, names::END_EFFECTOR_X),
+        path(ARM_UNIT, names::END_EFFECTOR_Y),
+    ]
+}
+
 /// The distance of the true end-effector position from the reference [mm] against time [s].
 fn error_mm(r: &LoopRun) -> Vec<(f64, f64)> {
     let c = |name: &str| r.column(name).unwrap_or_default();
-    let (t, xr, yr, x, y) = (c("time"), c("ctl.x_ref"), c("ctl.y_ref"), c("arm.x"), c("arm.y"));
+    let [xr, yr, x, y] = reference_and_position().map(|name| c(&name));
+    let t = c("time");
     (0..t.len().min(x.len())).map(|k| (t[k], 1e3 * (xr[k] - x[k]).hypot(yr[k] - y[k]))).collect()
 }
 
@@ -89,25 +101,22 @@ fn write_friction_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
 fn write_tracking_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
     let loops = &run.loops;
     let real = real_label(run);
-    let names = ["sim, perfect".to_owned(), "sim, NN".into(), "sim, none".into(), format!("{real}, NN"), format!("{real}, none")];
+    let labels = ["sim, perfect".to_owned(), "sim, NN".into(), "sim, none".into(), format!("{real}, NN"), format!("{real}, none")];
+    let [xr, yr, x, y] = reference_and_position();
     let panels = vec![
         Panel {
             title: "end-effector path (true positions)".into(),
             x_label: "x [m]".into(),
             y_label: "y [m]".into(),
-            series: std::iter::once(Series {
-                name: "reference".into(),
-                points: xy(&loops[0], "ctl.x_ref", "ctl.y_ref"),
-                style: Style::Dashed,
-            })
-            .chain((0..5).map(|k| Series { name: names[k].clone(), points: xy(&loops[k], "arm.x", "arm.y"), style: Style::Line }))
-            .collect(),
+            series: std::iter::once(Series { name: "reference".into(), points: xy(&loops[0], &xr, &yr), style: Style::Dashed })
+                .chain((0..5).map(|k| Series { name: labels[k].clone(), points: xy(&loops[k], &x, &y), style: Style::Line }))
+                .collect(),
         },
         Panel {
             title: "tracking error |x_d − x| (true position)".into(),
             x_label: "t [s]".into(),
             y_label: "error [mm]".into(),
-            series: (0..5).map(|k| Series { name: names[k].clone(), points: error_mm(&loops[k]), style: Style::Line }).collect(),
+            series: (0..5).map(|k| Series { name: labels[k].clone(), points: error_mm(&loops[k]), style: Style::Line }).collect(),
         },
     ];
     write_png(&out.join("tracking.png"), "Task-space tracking with friction compensation (Table 1)", &panels, 1)?;
@@ -153,12 +162,20 @@ fn write_gravity_compensation_figure(out: &Path, run: &PaperRun) -> anyhow::Resu
         let t = loops[5].column("time").unwrap_or_default();
         let mut series = vec![Series {
             name: "target".into(),
-            points: t.iter().copied().zip(loops[5].column(&format!("ctl.q_target_{j}")).unwrap_or_default()).collect(),
+            points: t
+                .iter()
+                .copied()
+                .zip(loops[5].column(&joint_path(CONTROLLER_UNIT, names::TARGET_ANGLE, j)).unwrap_or_default())
+                .collect(),
             style: Style::Dashed,
         }];
         for (k, name) in ["ideal", "NN", "none"].iter().enumerate() {
             let r = &loops[5 + k];
-            series.push(Series { name: format!("{name} compensation"), points: xy(r, "time", &format!("arm.q_{j}")), style: Style::Line });
+            series.push(Series {
+                name: format!("{name} compensation"),
+                points: xy(r, "time", &joint_path(ARM_UNIT, names::ANGLE, j)),
+                style: Style::Line,
+            });
         }
         panels.push(Panel { title: format!("joint {j}"), x_label: "t [s]".into(), y_label: "q [rad]".into(), series });
     }
@@ -178,10 +195,10 @@ fn write_adaptation_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
         range.zip(names).map(|(k, name)| Series { name: name.to_string(), points: points(&loops[k]), style: Style::Line }).collect()
     };
     let tracking = |r: &LoopRun| scaled(windowed_tracking_mse(r, a.mse_window_s), 1e6);
-    let largest = |part: &'static str| {
+    let largest = |family: &'static str| {
         move |r: &LoopRun| -> Vec<(f64, f64)> {
-            let columns: Vec<usize> =
-                r.columns.iter().enumerate().filter(|(_, c)| c.starts_with(&format!("comp.adapted_{part}_"))).map(|(k, _)| k).collect();
+            let prefix = path(COMPENSATOR_UNIT, &names::joint_prefix(family));
+            let columns: Vec<usize> = r.columns.iter().enumerate().filter(|(_, c)| c.starts_with(&prefix)).map(|(k, _)| k).collect();
             r.rows.iter().step_by(10).map(|row| (row[0], columns.iter().map(|&k| row[k]).fold(0.0, f64::max))).collect()
         }
     };
@@ -215,9 +232,9 @@ fn write_adaptation_figure(out: &Path, run: &PaperRun) -> anyhow::Result<()> {
             x_label: "t [s]".into(),
             y_label: "[N·m]".into(),
             series: vec![
-                Series { name: "drift (friction)".into(), points: largest("friction")(&loops[2]), style: Style::Line },
-                Series { name: "payload (gravity)".into(), points: largest("gravity")(&loops[6]), style: Style::Line },
-                Series { name: "no change (friction)".into(), points: largest("friction")(&loops[9]), style: Style::Dashed },
+                Series { name: "drift (friction)".into(), points: largest(names::ADAPTED_FRICTION)(&loops[2]), style: Style::Line },
+                Series { name: "payload (gravity)".into(), points: largest(names::ADAPTED_GRAVITY)(&loops[6]), style: Style::Line },
+                Series { name: "no change (friction)".into(), points: largest(names::ADAPTED_FRICTION)(&loops[9]), style: Style::Dashed },
             ],
         },
     ];

@@ -45,6 +45,7 @@ use neurarm_nn::{EncodedNet, WeightsFile};
 use serde::{Deserialize, Serialize};
 
 use crate::compensator::{load_nets, NetCompensator};
+use crate::names::{self, joint};
 use crate::units::NEWTON_METRE;
 use crate::{describe, per_joint, BuildError, ModelKind};
 
@@ -183,36 +184,36 @@ impl AdaptiveCompensatorModel {
         let (core, which) = NetCompensator::new(&mut b, joints, friction, gravity, enable)?;
         let signal = per_joint(&mut b, joints, |b, i| {
             b.input(
-                format!("s_{}", i + 1),
+                joint(names::LEARNING_SIGNAL, i + 1),
                 None,
                 0.0,
                 format!("Learning signal of joint {}: a controller's s_{} (0: nothing to learn)", i + 1, i + 1),
             )
         });
-        let adapt = b.tunable_flag("adapt", law.adapt, "Adapt the nets' output layers (false: the offline nets, as NnCompensator)");
-        let gain_friction = b.tunable("gain_friction", None, law.gain_friction, "Adaptation gain of the friction nets, gamma");
-        let gain_gravity = b.tunable("gain_gravity", None, law.gain_gravity, "Adaptation gain of the gravity net, gamma");
+        let adapt = b.tunable_flag(names::ADAPT, law.adapt, "Adapt the nets' output layers (false: the offline nets, as NnCompensator)");
+        let gain_friction = b.tunable(names::GAIN_FRICTION, None, law.gain_friction, "Adaptation gain of the friction nets, gamma");
+        let gain_gravity = b.tunable(names::GAIN_GRAVITY, None, law.gain_gravity, "Adaptation gain of the gravity net, gamma");
         let leakage = b.tunable(
-            "leakage",
+            names::LEAKAGE,
             crate::units::PER_SECOND,
             law.leakage,
             "Leakage sigma: the rate the weights are pulled back to the offline net's",
         );
         let bound_friction = b.tunable(
-            "bound_friction",
+            names::BOUND_FRICTION,
             NEWTON_METRE,
             law.bound_friction,
             "Largest change of a friction torque from the offline net's the adaptation may make",
         );
         let bound_gravity = b.tunable(
-            "bound_gravity",
+            names::BOUND_GRAVITY,
             NEWTON_METRE,
             law.bound_gravity,
             "Largest change of a gravity torque from the offline net's the adaptation may make",
         );
         let adapted_friction = per_joint(&mut b, joints, |b, i| {
             b.output(
-                format!("adapted_friction_{}", i + 1),
+                joint(names::ADAPTED_FRICTION, i + 1),
                 NEWTON_METRE,
                 format!("Largest change of joint {}'s friction torque the adapted net now makes (at most bound_friction)", i + 1),
                 &[],
@@ -220,14 +221,14 @@ impl AdaptiveCompensatorModel {
         });
         let adapted_gravity = per_joint(&mut b, joints, |b, i| {
             b.output(
-                format!("adapted_gravity_{}", i + 1),
+                joint(names::ADAPTED_GRAVITY, i + 1),
                 NEWTON_METRE,
                 format!("Largest change of joint {}'s gravity torque the adapted net now makes (at most bound_gravity)", i + 1),
                 &[],
             )
         });
         let nets_folder = b.string(
-            "nets_folder",
+            names::NETS_FOLDER,
             Causality::Parameter,
             Variability::Tunable,
             Some(String::new()),
@@ -480,11 +481,11 @@ pub struct LawError {
 
 fn check_law(law: &AdaptationLaw) -> Result<(), LawError> {
     for (name, value) in [
-        ("gain_friction", law.gain_friction),
-        ("gain_gravity", law.gain_gravity),
-        ("leakage", law.leakage),
-        ("bound_friction", law.bound_friction),
-        ("bound_gravity", law.bound_gravity),
+        (names::GAIN_FRICTION, law.gain_friction),
+        (names::GAIN_GRAVITY, law.gain_gravity),
+        (names::LEAKAGE, law.leakage),
+        (names::BOUND_FRICTION, law.bound_friction),
+        (names::BOUND_GRAVITY, law.bound_gravity),
     ] {
         if !(value.is_finite() && value >= 0.0) {
             return Err(LawError { name, value });

@@ -13,6 +13,7 @@ use neurarm_fmi_export::{Model, ModelDescription, ModelError, StaticModel, Table
 use neurarm_nn::{EncodedNet, InputEncoding, NetKind, Signal, WeightsFile};
 use serde::{Deserialize, Serialize};
 
+use crate::names;
 use crate::ports::{CompensatorPorts, Parts};
 use crate::{describe, BuildError, ModelKind};
 
@@ -239,7 +240,7 @@ fn check_friction_net(friction: &[(&str, &WeightsFile)], place: usize, name: &st
     let claimed = match file.kind {
         NetKind::Friction => file.joint,
         NetKind::Gravity => return Err(NetsError::GravityAsFriction { name: name.to_owned(), joint }),
-        NetKind::Unspecified => file.inputs.first().and_then(|s| s.name.strip_prefix("qd_")).and_then(|j| j.parse().ok()),
+        NetKind::Unspecified => file.inputs.first().and_then(|s| names::joint_of(&s.name, names::VELOCITY)),
     };
     if let Some(claimed) = claimed.filter(|&c| c != joint) {
         return Err(NetsError::JointOrder {

@@ -11,6 +11,7 @@ use std::path::Path;
 use neurarm_fmi_export::{BooleanVar, Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use serde::{Deserialize, Serialize};
 
+use crate::names;
 use crate::ports::ControllerInputs;
 use crate::units::{NEWTON_METRE, NEWTON_METRE_PER_RADIAN, NEWTON_METRE_SECOND_PER_RADIAN, PER_SECOND, RADIAN, RADIAN_PER_SECOND};
 use crate::{describe, per_joint, BuildError, ModelKind};
@@ -94,11 +95,16 @@ impl JointControllerModel {
         let mut b = TableBuilder::new();
         let ControllerInputs { q, qd, tau_comp } = ControllerInputs::declare(&mut b, joints, &vec![0.0; joints]);
         let q_ref = per_joint(&mut b, joints, |b, i| {
-            b.input(format!("q_ref_{}", i + 1), RADIAN, 0.0, format!("Target angle of joint {} when use_sequence is false", i + 1))
+            b.input(
+                names::joint(names::REFERENCE_ANGLE, i + 1),
+                RADIAN,
+                0.0,
+                format!("Target angle of joint {} when use_sequence is false", i + 1),
+            )
         });
         let qd_ref = per_joint(&mut b, joints, |b, i| {
             b.input(
-                format!("qd_ref_{}", i + 1),
+                names::joint(names::REFERENCE_VELOCITY, i + 1),
                 RADIAN_PER_SECOND,
                 0.0,
                 format!("Target velocity of joint {} when use_sequence is false", i + 1),
@@ -106,36 +112,40 @@ impl JointControllerModel {
         });
         let tau = per_joint(&mut b, joints, |b, i| {
             let deps = [q[i], qd[i], tau_comp[i], q_ref[i], qd_ref[i]];
-            b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &deps)
+            b.output(names::joint(names::TORQUE, i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &deps)
         });
         let target = per_joint(&mut b, joints, |b, i| {
-            b.output(format!("q_target_{}", i + 1), RADIAN, format!("Active target angle of joint {}", i + 1), &[q_ref[i]])
+            b.output(names::joint(names::TARGET_ANGLE, i + 1), RADIAN, format!("Active target angle of joint {}", i + 1), &[q_ref[i]])
         });
         let signal = per_joint(&mut b, joints, |b, i| {
             let deps = [q[i], qd[i], q_ref[i], qd_ref[i]];
             b.output(
-                format!("s_{}", i + 1),
+                names::joint(names::LEARNING_SIGNAL, i + 1),
                 RADIAN_PER_SECOND,
                 format!("Learning signal of joint {} for an adaptive compensator: (qd_d − qd) + lambda (q_d − q)", i + 1),
                 &deps,
             )
         });
-        let lambda = b.tunable("lambda", PER_SECOND, DEFAULT_JOINT_LAMBDA, "Weight of the position error in the learning signal, lambda");
+        let lambda =
+            b.tunable(names::LAMBDA, PER_SECOND, DEFAULT_JOINT_LAMBDA, "Weight of the position error in the learning signal, lambda");
         let kp = per_joint(&mut b, joints, |b, i| {
-            b.tunable(format!("kp_{}", i + 1), NEWTON_METRE_PER_RADIAN, kp, format!("Position gain of joint {}", i + 1))
+            b.tunable(names::joint(names::KP, i + 1), NEWTON_METRE_PER_RADIAN, kp, format!("Position gain of joint {}", i + 1))
         });
         let kd = per_joint(&mut b, joints, |b, i| {
             b.tunable(
-                format!("kd_{}", i + 1),
+                names::joint(names::KD, i + 1),
                 NEWTON_METRE_SECOND_PER_RADIAN,
                 kd,
                 format!("Velocity gain of joint {} (0 in the paper)", i + 1),
             )
         });
-        let use_sequence =
-            b.tunable_flag("use_sequence", use_sequence, "Follow the built-in target sequence (true) or the q_ref/qd_ref inputs (false)");
+        let use_sequence = b.tunable_flag(
+            names::USE_SEQUENCE,
+            use_sequence,
+            "Follow the built-in target sequence (true) or the q_ref/qd_ref inputs (false)",
+        );
         let repeat_sequence = b.tunable_flag(
-            "repeat_sequence",
+            names::REPEAT_SEQUENCE,
             false,
             "Start the built-in sequence again after its last segment (false: the last target holds)",
         );

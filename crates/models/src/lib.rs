@@ -16,6 +16,7 @@ pub mod adaptive;
 pub mod compensator;
 pub mod ideal;
 pub mod joint;
+pub mod names;
 pub mod planar_arm;
 pub mod ports;
 pub mod signals;

@@ -19,6 +19,7 @@ use neurarm_physics::arm::{
 use neurarm_physics::config::ArmConfig;
 use serde::{Deserialize, Serialize};
 
+use crate::names::{self, joint};
 use crate::ports::{drift_error, DriftPorts};
 use crate::units::*;
 use crate::{describe, BuildError, ModelKind};
@@ -53,7 +54,7 @@ pub enum ArmError {
     #[error("invalid parameter: {0} (FMU names: length_i, mass_i, coulomb_pos_i, …; i from 1)")]
     Parameter(ParamError),
     /// The noise seed is negative.
-    #[error("noise_seed = {0} must be >= 0")]
+    #[error("{} = {0} must be >= 0", names::NOISE_SEED)]
     NegativeSeed(i32),
     /// The initial state is not finite.
     #[error("initial state entry {index} = {value} is not finite")]
@@ -77,10 +78,10 @@ pub enum ArmError {
     State(#[from] StateError),
 }
 
-/// A real parameter of one joint: FMU name prefix (the variable is `{name}_{i}`), unit,
-/// description, and how it maps to and from the configuration.
+/// A real parameter of one joint: its family of [`names`] (the variable of joint i is
+/// [`names::joint`]`(name, i)`), unit, description, and how it maps to and from the configuration.
 pub struct JointParameter {
-    /// Name prefix.
+    /// Family name.
     pub name: &'static str,
     /// Unit, if any.
     pub unit: Option<Unit>,
@@ -92,7 +93,7 @@ pub struct JointParameter {
 
 /// A real parameter of the whole arm.
 pub struct ArmParameter {
-    /// Name.
+    /// Name, one of [`names`].
     pub name: &'static str,
     /// Unit, if any.
     pub unit: Option<Unit>,
@@ -135,7 +136,7 @@ fn set_optional_entry(list: &mut Option<Vec<f64>>, n: usize, i: usize, v: f64) {
 
 /// A parameter of one link: one field of its [`LinkParams`](neurarm_physics::arm::LinkParams).
 macro_rules! link {
-    ($name:literal, $unit:expr, $desc:literal, $field:ident) => {
+    ($name:expr, $unit:expr, $desc:literal, $field:ident) => {
         JointParameter {
             name: $name,
             unit: Some($unit),
@@ -148,7 +149,7 @@ macro_rules! link {
 
 /// A friction parameter: one field of one direction's branch.
 macro_rules! friction {
-    ($name:literal, $unit:expr, $desc:literal, $positive:expr, $field:ident) => {
+    ($name:expr, $unit:expr, $desc:literal, $positive:expr, $field:ident) => {
         JointParameter {
             name: $name,
             unit: Some($unit),
@@ -161,7 +162,7 @@ macro_rules! friction {
 
 /// The viscous fall-off of one direction: 0 in the FMU stands for "linear" (`None`).
 macro_rules! falloff {
-    ($name:literal, $desc:literal, $positive:expr) => {
+    ($name:expr, $desc:literal, $positive:expr) => {
         JointParameter {
             name: $name,
             unit: Some(RADIAN_PER_SECOND),
@@ -174,7 +175,7 @@ macro_rules! falloff {
 
 /// A per-joint entry of an optional hardware list, 0 standing for "off" for that joint.
 macro_rules! hardware_entry {
-    ($name:literal, $unit:expr, $desc:literal, $field:ident) => {
+    ($name:expr, $unit:expr, $desc:literal, $field:ident) => {
         JointParameter {
             name: $name,
             unit: $unit,
@@ -188,69 +189,75 @@ macro_rules! hardware_entry {
     };
 }
 
-/// Parameters of each joint, in table order; the FMU variable of joint i is `{name}_{i}`.
+/// Parameters of each joint, in table order; the FMU variable of joint i is `{name}_{i}`
+/// ([`names::joint`]).
 pub const JOINT_PARAMETERS: [JointParameter; 16] = [
-    link!("length", METRE, "Length of link {}", length_m),
-    link!("mass", KILOGRAM, "Mass of link {}", mass_kg),
-    link!("com", METRE, "Distance from joint {} to the centre of mass of its link", com_m),
-    link!("inertia", KILOGRAM_METRE_SQUARED, "Moment of inertia of link {} about its centre of mass", inertia_kgm2),
-    friction!("coulomb_pos", NEWTON_METRE, "Coulomb friction of joint {}, positive velocity", true, coulomb_nm),
-    friction!("static_pos", NEWTON_METRE, "Static (breakaway) friction of joint {}, positive velocity", true, static_nm),
+    link!(names::LENGTH, METRE, "Length of link {}", length_m),
+    link!(names::MASS, KILOGRAM, "Mass of link {}", mass_kg),
+    link!(names::CENTRE_OF_MASS, METRE, "Distance from joint {} to the centre of mass of its link", com_m),
+    link!(names::INERTIA, KILOGRAM_METRE_SQUARED, "Moment of inertia of link {} about its centre of mass", inertia_kgm2),
+    friction!(names::COULOMB_POS, NEWTON_METRE, "Coulomb friction of joint {}, positive velocity", true, coulomb_nm),
+    friction!(names::STATIC_POS, NEWTON_METRE, "Static (breakaway) friction of joint {}, positive velocity", true, static_nm),
     friction!(
-        "stribeck_velocity_pos",
+        names::STRIBECK_VELOCITY_POS,
         RADIAN_PER_SECOND,
         "Stribeck velocity of joint {}, positive velocity",
         true,
         stribeck_velocity_rad_s
     ),
     friction!(
-        "viscous_pos",
+        names::VISCOUS_POS,
         NEWTON_METRE_SECOND_PER_RADIAN,
         "Viscous friction coefficient of joint {} at low speed, positive velocity",
         true,
         viscous_nms_rad
     ),
-    falloff!("viscous_falloff_pos", "Speed at which the viscous slope of joint {} has halved, positive velocity (0: linear)", true),
-    friction!("coulomb_neg", NEWTON_METRE, "Coulomb friction of joint {}, negative velocity (magnitude)", false, coulomb_nm),
-    friction!("static_neg", NEWTON_METRE, "Static (breakaway) friction of joint {}, negative velocity (magnitude)", false, static_nm),
+    falloff!(names::VISCOUS_FALLOFF_POS, "Speed at which the viscous slope of joint {} has halved, positive velocity (0: linear)", true),
+    friction!(names::COULOMB_NEG, NEWTON_METRE, "Coulomb friction of joint {}, negative velocity (magnitude)", false, coulomb_nm),
+    friction!(names::STATIC_NEG, NEWTON_METRE, "Static (breakaway) friction of joint {}, negative velocity (magnitude)", false, static_nm),
     friction!(
-        "stribeck_velocity_neg",
+        names::STRIBECK_VELOCITY_NEG,
         RADIAN_PER_SECOND,
         "Stribeck velocity of joint {}, negative velocity",
         false,
         stribeck_velocity_rad_s
     ),
     friction!(
-        "viscous_neg",
+        names::VISCOUS_NEG,
         NEWTON_METRE_SECOND_PER_RADIAN,
         "Viscous friction coefficient of joint {} at low speed, negative velocity",
         false,
         viscous_nms_rad
     ),
-    falloff!("viscous_falloff_neg", "Speed at which the viscous slope of joint {} has halved, negative velocity (0: linear)", false),
-    hardware_entry!("torque_limit", Some(NEWTON_METRE), "Largest torque motor {} can apply (0: no limit)", torque_limit_nm),
-    hardware_entry!("encoder_counts", None, "Encoder counts per revolution of joint {} (0: exact angles)", encoder_counts_per_rev),
+    falloff!(names::VISCOUS_FALLOFF_NEG, "Speed at which the viscous slope of joint {} has halved, negative velocity (0: linear)", false),
+    hardware_entry!(names::TORQUE_LIMIT, Some(NEWTON_METRE), "Largest torque motor {} can apply (0: no limit)", torque_limit_nm),
+    hardware_entry!(names::ENCODER_COUNTS, None, "Encoder counts per revolution of joint {} (0: exact angles)", encoder_counts_per_rev),
 ];
 
 /// A parameter of the whole arm: one field of the configuration.
 macro_rules! arm {
-    ($name:literal, $unit:expr, $desc:literal, $($field:ident).+) => {
+    ($name:expr, $unit:expr, $desc:literal, $($field:ident).+) => {
         ArmParameter { name: $name, unit: Some($unit), description: $desc, get: |c| c.$($field).+, set: |c, v| c.$($field).+ = v }
     };
 }
 
 /// Parameters of the whole arm, in table order.
 pub const ARM_PARAMETERS: [ArmParameter; 5] = [
-    arm!("gravity", METRE_PER_SECOND_SQUARED, "Magnitude of gravitational acceleration", arm.gravity_m_s2),
+    arm!(names::GRAVITY, METRE_PER_SECOND_SQUARED, "Magnitude of gravitational acceleration", arm.gravity_m_s2),
     arm!(
-        "base_angle",
+        names::BASE_ANGLE,
         RADIAN,
         "Tilt of the arm's plane: 0 horizontal (no gravity torque), pi/2 vertical (gravity along -y)",
         arm.base_angle_rad
     ),
-    arm!("internal_step", Unit::SECOND, "Longest RK4 sub-step inside a communication step", integrator.internal_step_s),
-    arm!("q_noise_std", RADIAN, "Standard deviation of the noise on measured angles", hardware.q_noise_std_rad),
-    arm!("qd_noise_std", RADIAN_PER_SECOND, "Standard deviation of the noise on measured velocities", hardware.qd_noise_std_rad_s),
+    arm!(names::INTERNAL_STEP, Unit::SECOND, "Longest RK4 sub-step inside a communication step", integrator.internal_step_s),
+    arm!(names::ANGLE_NOISE_STD, RADIAN, "Standard deviation of the noise on measured angles", hardware.q_noise_std_rad),
+    arm!(
+        names::VELOCITY_NOISE_STD,
+        RADIAN_PER_SECOND,
+        "Standard deviation of the noise on measured velocities",
+        hardware.qd_noise_std_rad_s
+    ),
 ];
 
 /// Value references of the arm's variables.
@@ -278,41 +285,36 @@ fn table(identifier: &str, config: &ArmConfig, initial: &ArmState) -> Result<(Mo
         .map_err(|_| BuildError::Spec(format!("noise seed {} does not fit an FMI Integer", config.hardware.seed)))?;
     let mut b = TableBuilder::new();
     let joints = |f: &mut dyn FnMut(usize) -> RealVar| (0..n).map(f).collect::<Vec<RealVar>>();
-    let tau = joints(&mut |i| b.input(format!("tau_{}", i + 1), NEWTON_METRE, 0.0, format!("Torque command of joint {}", i + 1)));
-    let q = joints(&mut |i| b.output(format!("q_{}", i + 1), RADIAN, format!("Angle of joint {} relative to link {}", i + 1, i), &[]));
-    let qd = joints(&mut |i| b.output(format!("qd_{}", i + 1), RADIAN_PER_SECOND, format!("Velocity of joint {}", i + 1), &[]));
+    let tau = joints(&mut |i| b.input(joint(names::TORQUE, i + 1), NEWTON_METRE, 0.0, format!("Torque command of joint {}", i + 1)));
+    let q = joints(&mut |i| b.output(joint(names::ANGLE, i + 1), RADIAN, format!("Angle of joint {} relative to link {}", i + 1, i), &[]));
+    let qd = joints(&mut |i| b.output(joint(names::VELOCITY, i + 1), RADIAN_PER_SECOND, format!("Velocity of joint {}", i + 1), &[]));
     let ee = [
-        b.output("x", METRE, "End-effector position, x", &[]),
-        b.output("y", METRE, "End-effector position, y", &[]),
-        b.output("xd", METRE_PER_SECOND, "End-effector velocity, x", &[]),
-        b.output("yd", METRE_PER_SECOND, "End-effector velocity, y", &[]),
+        b.output(names::END_EFFECTOR_X, METRE, "End-effector position, x", &[]),
+        b.output(names::END_EFFECTOR_Y, METRE, "End-effector position, y", &[]),
+        b.output(names::END_EFFECTOR_XD, METRE_PER_SECOND, "End-effector velocity, x", &[]),
+        b.output(names::END_EFFECTOR_YD, METRE_PER_SECOND, "End-effector velocity, y", &[]),
     ];
-    let q_meas =
-        joints(&mut |i| b.output(format!("q_meas_{}", i + 1), RADIAN, format!("Measured angle of joint {} (encoder, noise)", i + 1), &[]));
+    let q_meas = joints(&mut |i| {
+        b.output(joint(names::MEASURED_ANGLE, i + 1), RADIAN, format!("Measured angle of joint {} (encoder, noise)", i + 1), &[])
+    });
     let qd_meas = joints(&mut |i| {
-        b.output(format!("qd_meas_{}", i + 1), RADIAN_PER_SECOND, format!("Measured velocity of joint {} (noise)", i + 1), &[])
+        b.output(joint(names::MEASURED_VELOCITY, i + 1), RADIAN_PER_SECOND, format!("Measured velocity of joint {} (noise)", i + 1), &[])
     });
     let joint_params = JOINT_PARAMETERS
         .iter()
         .map(|p| {
             (0..n)
-                .map(|i| {
-                    b.parameter(
-                        format!("{}_{}", p.name, i + 1),
-                        p.unit,
-                        (p.get)(config, i),
-                        p.description.replace("{}", &(i + 1).to_string()),
-                    )
-                })
+                .map(|i| b.parameter(joint(p.name, i + 1), p.unit, (p.get)(config, i), p.description.replace("{}", &(i + 1).to_string())))
                 .collect()
         })
         .collect();
-    let q0 = joints(&mut |i| b.parameter(format!("q0_{}", i + 1), RADIAN, initial.q[i], format!("Initial angle of joint {}", i + 1)));
+    let q0 =
+        joints(&mut |i| b.parameter(joint(names::START_ANGLE, i + 1), RADIAN, initial.q[i], format!("Initial angle of joint {}", i + 1)));
     let qd0 = joints(&mut |i| {
-        b.parameter(format!("qd0_{}", i + 1), RADIAN_PER_SECOND, initial.qd[i], format!("Initial velocity of joint {}", i + 1))
+        b.parameter(joint(names::START_VELOCITY, i + 1), RADIAN_PER_SECOND, initial.qd[i], format!("Initial velocity of joint {}", i + 1))
     });
     let arm_params = ARM_PARAMETERS.iter().map(|p| b.parameter(p.name, p.unit, (p.get)(config), p.description)).collect();
-    let seed = b.integer("noise_seed", Causality::Parameter, Variability::Fixed, Some(seed), "Seed of the measurement noise");
+    let seed = b.integer(names::NOISE_SEED, Causality::Parameter, Variability::Fixed, Some(seed), "Seed of the measurement noise");
     let drift = DriftPorts::declare(&mut b, n);
     let description = describe(identifier, format!("Planar {n}-R arm with joint friction (neurarm)"), b.finish())?;
     Ok((description, Layout { tau, q, qd, ee, q_meas, qd_meas, joint_params, q0, qd0, arm_params, seed, drift }))

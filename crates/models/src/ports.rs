@@ -10,6 +10,7 @@ use neurarm_fmi_export::{BooleanVar, RealVar, TableBuilder, Values};
 
 use neurarm_physics::arm::{OperatingChange, ParamError};
 
+use crate::names::{self, joint};
 use crate::per_joint;
 use crate::units::{KILOGRAM, METRE, NEWTON_METRE, RADIAN, RADIAN_PER_SECOND};
 
@@ -47,15 +48,16 @@ impl CompensatorPorts {
     /// Declares the ports of a compensator of `joints` joints with `parts` in `b`; the switches
     /// start as `enable`, and a part the compensator lacks starts switched off.
     pub fn declare(b: &mut TableBuilder, joints: usize, parts: Parts, enable: (bool, bool)) -> Self {
-        let q = per_joint(b, joints, |b, i| b.input(format!("q_{}", i + 1), RADIAN, 0.0, format!("Angle of joint {}", i + 1)));
-        let qd =
-            per_joint(b, joints, |b, i| b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Velocity of joint {}", i + 1)));
+        let q = per_joint(b, joints, |b, i| b.input(joint(names::ANGLE, i + 1), RADIAN, 0.0, format!("Angle of joint {}", i + 1)));
+        let qd = per_joint(b, joints, |b, i| {
+            b.input(joint(names::VELOCITY, i + 1), RADIAN_PER_SECOND, 0.0, format!("Velocity of joint {}", i + 1))
+        });
         let source = parts.source;
         let capital = |s: &str| s[..1].to_uppercase() + &s[1..];
         let friction = per_joint(b, joints, |b, i| {
             let deps: &[RealVar] = if parts.friction { std::slice::from_ref(&qd[i]) } else { &[] };
             b.output(
-                format!("tau_friction_{}", i + 1),
+                joint(names::FRICTION_TORQUE, i + 1),
                 NEWTON_METRE,
                 format!("{} friction torque of joint {}", capital(source), i + 1),
                 deps,
@@ -63,7 +65,12 @@ impl CompensatorPorts {
         });
         let gravity = per_joint(b, joints, |b, i| {
             let deps: &[RealVar] = if parts.gravity { &q } else { &[] };
-            b.output(format!("tau_gravity_{}", i + 1), NEWTON_METRE, format!("{} gravity torque of joint {}", capital(source), i + 1), deps)
+            b.output(
+                joint(names::GRAVITY_TORQUE, i + 1),
+                NEWTON_METRE,
+                format!("{} gravity torque of joint {}", capital(source), i + 1),
+                deps,
+            )
         });
         let total = per_joint(b, joints, |b, i| {
             let mut deps: Vec<RealVar> = if parts.gravity { q.clone() } else { Vec::new() };
@@ -71,14 +78,15 @@ impl CompensatorPorts {
                 deps.push(qd[i]);
             }
             b.output(
-                format!("tau_comp_{}", i + 1),
+                joint(names::COMPENSATION_TORQUE, i + 1),
                 NEWTON_METRE,
                 format!("Compensating torque of joint {}: the sum of the enabled parts", i + 1),
                 &deps,
             )
         });
-        let enable_friction = b.tunable_flag("enable_friction", enable.0 && parts.friction, format!("Add the {source} friction torques"));
-        let enable_gravity = b.tunable_flag("enable_gravity", enable.1 && parts.gravity, format!("Add the {source} gravity torques"));
+        let enable_friction =
+            b.tunable_flag(names::ENABLE_FRICTION, enable.0 && parts.friction, format!("Add the {source} friction torques"));
+        let enable_gravity = b.tunable_flag(names::ENABLE_GRAVITY, enable.1 && parts.gravity, format!("Add the {source} gravity torques"));
         Self { q, qd, friction, gravity, total, enable_friction, enable_gravity }
     }
 
@@ -110,15 +118,16 @@ pub struct ControllerInputs {
 impl ControllerInputs {
     /// Declares them in `b` for `joints` joints, the angles starting at `q_start` [rad].
     pub fn declare(b: &mut TableBuilder, joints: usize, q_start: &[f64]) -> Self {
-        let q =
-            per_joint(b, joints, |b, i| b.input(format!("q_{}", i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1)));
+        let q = per_joint(b, joints, |b, i| {
+            b.input(joint(names::ANGLE, i + 1), RADIAN, q_start[i], format!("Measured angle of joint {}", i + 1))
+        });
         let qd = per_joint(b, joints, |b, i| {
-            b.input(format!("qd_{}", i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
+            b.input(joint(names::VELOCITY, i + 1), RADIAN_PER_SECOND, 0.0, format!("Measured velocity of joint {}", i + 1))
         });
         let tau_comp = per_joint(b, joints, |b, i| {
             let what =
                 format!("Compensating (or feed-forward) torque added to the command of joint {} (a compensator's tau_comp, or 0)", i + 1);
-            b.input(format!("tau_comp_{}", i + 1), NEWTON_METRE, 0.0, what)
+            b.input(joint(names::COMPENSATION_TORQUE, i + 1), NEWTON_METRE, 0.0, what)
         });
         Self { q, qd, tau_comp }
     }
@@ -145,7 +154,7 @@ impl DriftPorts {
     pub fn declare(b: &mut TableBuilder, joints: usize) -> Self {
         let coulomb_scale = per_joint(b, joints, |b, i| {
             b.tunable(
-                format!("coulomb_scale_{}", i + 1),
+                joint(names::COULOMB_SCALE, i + 1),
                 None,
                 1.0,
                 format!("Factor on the Coulomb and static friction of joint {}, both directions (1: as configured)", i + 1),
@@ -153,15 +162,15 @@ impl DriftPorts {
         });
         let viscous_scale = per_joint(b, joints, |b, i| {
             b.tunable(
-                format!("viscous_scale_{}", i + 1),
+                joint(names::VISCOUS_SCALE, i + 1),
                 None,
                 1.0,
                 format!("Factor on the viscous friction of joint {}, both directions (1: as configured)", i + 1),
             )
         });
-        let payload_mass = b.tunable("payload_mass", KILOGRAM, 0.0, "Point mass held at the tip (0: none)");
+        let payload_mass = b.tunable(names::PAYLOAD_MASS, KILOGRAM, 0.0, "Point mass held at the tip (0: none)");
         let payload_offset =
-            b.tunable("payload_offset", METRE, 0.0, "Position of the payload beyond the tip along the last link (0: at the tip)");
+            b.tunable(names::PAYLOAD_OFFSET, METRE, 0.0, "Position of the payload beyond the tip along the last link (0: at the tip)");
         Self { coulomb_scale, viscous_scale, payload_mass, payload_offset }
     }
 
@@ -192,14 +201,15 @@ impl DriftPorts {
 /// `coulomb_scale_2`, `payload_mass_kg` is `payload_mass`.
 pub fn drift_error(e: &ParamError) -> String {
     let text = e.to_string();
-    for what in ["coulomb_scale", "viscous_scale"] {
-        if let Some(rest) = text.strip_prefix(&format!("{what}[")) {
+    // The physics' field names on the left, the FMU's variables on the right.
+    for (field, family) in [("coulomb_scale", names::COULOMB_SCALE), ("viscous_scale", names::VISCOUS_SCALE)] {
+        if let Some(rest) = text.strip_prefix(&format!("{field}[")) {
             if let Some((index, tail)) = rest.split_once(']') {
                 if let Ok(i) = index.parse::<usize>() {
-                    return format!("{what}_{}{tail}", i + 1);
+                    return format!("{}{tail}", joint(family, i + 1));
                 }
             }
         }
     }
-    text.replacen("payload_mass_kg", "payload_mass", 1).replacen("payload_offset_m", "payload_offset", 1)
+    text.replacen("payload_mass_kg", names::PAYLOAD_MASS, 1).replacen("payload_offset_m", names::PAYLOAD_OFFSET, 1)
 }

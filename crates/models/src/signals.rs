@@ -7,6 +7,7 @@ use neurarm_fmi_export::codec::{Put, Reader};
 use neurarm_fmi_export::{Model, ModelDescription, ModelError, RealVar, StaticModel, TableBuilder, Values};
 use serde::{Deserialize, Serialize};
 
+use crate::names;
 use crate::{describe, BuildError, ModelKind};
 
 /// Spec of an integrator.
@@ -65,9 +66,9 @@ impl IntegratorModel {
     /// An integrator FMU named `identifier` starting at `y0`.
     pub fn new(identifier: &str, y0: f64) -> Result<Self, BuildError> {
         let mut b = TableBuilder::new();
-        let u = b.input("u", None, 0.0, "Input: the derivative of y");
-        let y = b.output("y", None, "Integral of u from y0", &[]);
-        let y0 = b.parameter("y0", None, y0, "Initial value of y");
+        let u = b.input(names::BLOCK_INPUT, None, 0.0, "Input: the derivative of y");
+        let y = b.output(names::BLOCK_OUTPUT, None, "Integral of u from y0", &[]);
+        let y0 = b.parameter(names::BLOCK_START, None, y0, "Initial value of y");
         let description =
             describe(identifier, "Integrator y' = u with the input held over each step (neurarm test block)".into(), b.finish())?;
         Ok(Self { description, u, y, y0, state: 0.0 })
@@ -124,9 +125,9 @@ impl GainModel {
     /// A gain FMU named `identifier` with gain `k`.
     pub fn new(identifier: &str, k: f64) -> Result<Self, BuildError> {
         let mut b = TableBuilder::new();
-        let u = b.input("u", None, 0.0, "Input");
-        let y = b.output("y", None, "k·u", &[u]);
-        let k = b.tunable("k", None, k, "Gain");
+        let u = b.input(names::BLOCK_INPUT, None, 0.0, "Input");
+        let y = b.output(names::BLOCK_OUTPUT, None, "k·u", &[u]);
+        let k = b.tunable(names::BLOCK_GAIN, None, k, "Gain");
         let description = describe(identifier, "Static gain y = k·u (neurarm test block)".into(), b.finish())?;
         Ok(Self { description, u, y, k })
     }

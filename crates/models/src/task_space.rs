@@ -21,6 +21,7 @@ use neurarm_physics::control::{
 };
 use serde::{Deserialize, Serialize};
 
+use crate::names::{self, joint};
 use crate::ports::ControllerInputs;
 use crate::units::{METRE, NEWTON_METRE, PER_SECOND, PER_SECOND_SQUARED, RADIAN, RADIAN_PER_SECOND};
 use crate::{describe, per_joint, BuildError, ModelKind};
@@ -141,12 +142,12 @@ impl TaskSpaceControllerModel {
         let ControllerInputs { q, qd, tau_comp } = ControllerInputs::declare(&mut b, n, q_start);
         let all: Vec<RealVar> = q.iter().chain(&qd).chain(&tau_comp).copied().collect();
         let tau = per_joint(&mut b, n, |b, i| {
-            b.output(format!("tau_{}", i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all)
+            b.output(joint(names::TORQUE, i + 1), NEWTON_METRE, format!("Torque command of joint {}", i + 1), &all)
         });
         let q_and_qd: Vec<RealVar> = q.iter().chain(&qd).copied().collect();
         let signal = per_joint(&mut b, n, |b, i| {
             b.output(
-                format!("s_{}", i + 1),
+                joint(names::LEARNING_SIGNAL, i + 1),
                 None,
                 format!("Learning signal of joint {} for an adaptive compensator: (H⁻¹ Jᵀ (ė + λ e))_{} [1/(kg·s)]", i + 1, i + 1),
                 &q_and_qd,
@@ -154,7 +155,7 @@ impl TaskSpaceControllerModel {
         });
         let intended_speed = per_joint(&mut b, n, |b, i| {
             b.output(
-                format!("qd_intended_{}", i + 1),
+                joint(names::INTENDED_VELOCITY, i + 1),
                 RADIAN_PER_SECOND,
                 format!(
                     "Speed joint {} is commanded towards: qd_{} + intent_horizon · u_{} (u the law's joint acceleration; the second term dropped where it points against the joint's motion)",
@@ -165,47 +166,49 @@ impl TaskSpaceControllerModel {
                 &q_and_qd,
             )
         });
-        let reference = [b.output("x_ref", METRE, "Reference x_d(t)", &[]), b.output("y_ref", METRE, "Reference y_d(t)", &[])];
-        let error = [b.output("error_x", METRE, "Tracking error x_d − x", &q), b.output("error_y", METRE, "Tracking error y_d − y", &q)];
-        let kp = b.tunable("kp", PER_SECOND_SQUARED, gains.kp, "Position gain K_p");
-        let kd = b.tunable("kd", PER_SECOND, gains.kd, "Velocity gain K_d");
+        let reference =
+            [b.output(names::REFERENCE_X, METRE, "Reference x_d(t)", &[]), b.output(names::REFERENCE_Y, METRE, "Reference y_d(t)", &[])];
+        let error =
+            [b.output(names::ERROR_X, METRE, "Tracking error x_d − x", &q), b.output(names::ERROR_Y, METRE, "Tracking error y_d − y", &q)];
+        let kp = b.tunable(names::KP, PER_SECOND_SQUARED, gains.kp, "Position gain K_p");
+        let kd = b.tunable(names::KD, PER_SECOND, gains.kd, "Velocity gain K_d");
         let null_damping = b.tunable(
-            "null_damping",
+            names::NULL_DAMPING,
             PER_SECOND,
             gains.null_damping,
             "Null-space damping k_null: self-motion decays as -k_null (I - J#J) qd",
         );
         let null_stiffness = b.tunable(
-            "null_stiffness",
+            names::NULL_STIFFNESS,
             PER_SECOND_SQUARED,
             gains.null_stiffness,
             "Null-space stiffness k_rest: the self-motion returns to the rest pose as (I - J#J)(k_rest (q_rest - q) - k_null qd); 0 (default) damps it only",
         );
         let rest_pose = per_joint(&mut b, n, |b, i| {
             b.tunable(
-                format!("q_rest_{}", i + 1),
+                joint(names::REST_ANGLE, i + 1),
                 RADIAN,
                 q_start[i],
                 format!("Rest angle of joint {} the self-motion returns to (default: the start pose)", i + 1),
             )
         });
         let lambda = b.tunable(
-            "lambda",
+            names::LAMBDA,
             PER_SECOND,
             DEFAULT_TASK_LAMBDA,
             "Weight of the position error in the learning signal, lambda (between 0 and kd)",
         );
         let intent_horizon = b.tunable(
-            "intent_horizon",
+            names::INTENT_HORIZON,
             Unit::SECOND,
             0.0,
             "Look-ahead of qd_intended [s]: a friction compensator fed qd_intended instead of the measured speed pushes a joint at rest the way the law accelerates it (0: qd_intended = qd)",
         );
         let centre = [
-            b.parameter("centre_x", METRE, centre[0], "x of the reference's centre"),
-            b.parameter("centre_y", METRE, centre[1], "y of the reference's centre"),
+            b.parameter(names::CENTRE_X, METRE, centre[0], "x of the reference's centre"),
+            b.parameter(names::CENTRE_Y, METRE, centre[1], "y of the reference's centre"),
         ];
-        let scale = b.parameter("reference_scale", None, scale, "Scale of the reference (1: the paper's size, 0.4 m × 0.3 m across)");
+        let scale = b.parameter(names::REFERENCE_SCALE, None, scale, "Scale of the reference (1: the paper's size, 0.4 m × 0.3 m across)");
         let text = format!("Task-space computed-torque controller for a {n}-joint planar arm, the paper's reference (neurarm)");
         let description = describe(identifier, text, b.finish())?;
         let data = TaskSpaceData::new(&model);

@@ -10,6 +10,7 @@ use super::{
     PAPER_TABLE_1,
 };
 use crate::experiments::*;
+use neurarm_models::names;
 
 /// The NN compensator FMUs the loops use, each with only the part it compensates.
 pub(super) struct NnCompensators {
@@ -168,11 +169,13 @@ fn diagnostic_specs(bases: &DiagnosticBases, n: usize, noisy: bool) -> Vec<Syste
         spec
     };
     let law_scaled = |scale: f64| {
-        let values: Vec<(String, f64)> =
-            (1..=n).flat_map(|i| [(format!("coulomb_scale_{i}"), scale), (format!("viscous_scale_{i}"), scale)]).collect();
-        set(bases.sim_perfect.clone(), "comp", &values)
+        let values: Vec<(String, f64)> = (1..=n)
+            .flat_map(|i| [(names::joint(names::COULOMB_SCALE, i), scale), (names::joint(names::VISCOUS_SCALE, i), scale)])
+            .collect();
+        set(bases.sim_perfect.clone(), COMPENSATOR_UNIT, &values)
     };
-    let quiet = |spec: &SystemSpec| set(spec.clone(), "arm", &[("q_noise_std".into(), 0.0), ("qd_noise_std".into(), 0.0)]);
+    let quiet =
+        |spec: &SystemSpec| set(spec.clone(), ARM_UNIT, &[(names::ANGLE_NOISE_STD.into(), 0.0), (names::VELOCITY_NOISE_STD.into(), 0.0)]);
     let mut specs = vec![
         law_scaled(1.0 - LAW_ERROR),
         law_scaled(1.0 + LAW_ERROR),

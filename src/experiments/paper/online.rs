@@ -10,7 +10,7 @@ use super::{Stages, ADAPTATION_LOOPS};
 use crate::experiments::adaptation::{self, AdaptationResults, AdaptationSettings};
 use crate::experiments::*;
 use crate::export::export_fmu_for;
-use neurarm_models::{AdaptationLaw, FmuSpec, IdealCompensatorSpec, ModelSpec};
+use neurarm_models::{names, AdaptationLaw, FmuSpec, IdealCompensatorSpec, ModelSpec};
 
 /// The compensators only the adaptation runs use.
 struct AdaptationFmus {
@@ -134,15 +134,15 @@ fn adaptation_figures(
         drift_mse_m2: drift_mse,
         drift_over_perfect: drift_mse.map(|m| m / drift_mse[0]),
         drift_before_mse_m2: before,
-        drift_largest_adaptation_nm: adaptation::largest_adaptation(&loops[2], "friction"),
+        drift_largest_adaptation_nm: adaptation::largest_adaptation(&loops[2], names::ADAPTED_FRICTION),
         payload_kg,
         payload_over_perfect: std::array::from_fn(|c| settled[c].iter().zip(&settled[0]).map(|(e, p)| e / p).collect()),
         payload_settled_rad: settled,
         payload_before_rad: settled_before,
-        payload_largest_adaptation_nm: adaptation::largest_adaptation(&loops[6], "gravity"),
+        payload_largest_adaptation_nm: adaptation::largest_adaptation(&loops[6], names::ADAPTED_GRAVITY),
         steady_mse_m2: steady,
         steady_adaptive_over_static: steady[1] / steady[0],
-        steady_largest_adaptation_nm: adaptation::largest_adaptation(&loops[9], "friction"),
+        steady_largest_adaptation_nm: adaptation::largest_adaptation(&loops[9], names::ADAPTED_FRICTION),
         friction_bound_nm: a.friction_law.bound_friction,
         failures,
     }
