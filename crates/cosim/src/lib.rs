@@ -75,7 +75,7 @@ mod unit;
 
 pub use error::{DescriptionError, DiscardedStep, FmuFileError, FmuProblem, MasterError, SpecError, SystemFileError};
 pub use interface::{BaseType, Causality, EnumerationInfo, FmiVersion, Initial, Interface, Variability, VariableInfo};
-pub use recording::{run, RunOutcome};
+pub use recording::{run, Rows, RunOutcome};
 pub use simulation::{Handle, RunEnd, Simulation};
 pub use spec::{Algorithm, ConnectionSpec, EventSpec, FmuEntry, OnDiscard, SimulationSpec, SystemSpec, Value};
 pub use system::{expand_connection, Link, Setting, System, UnitPlan};

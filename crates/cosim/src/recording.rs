@@ -14,11 +14,84 @@ use crate::spec::SystemSpec;
 use crate::system::System;
 use crate::unit::Unit;
 
+/// The most values recording reserves room for ahead (2²⁴, 128 MiB).
+pub const RESERVE_VALUES: usize = 1 << 24;
+
+/// Recorded rows, stored one after the other in one buffer so that recording into reserved
+/// room allocates nothing: row k is the `width` values from `k × width`, time first.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Rows {
+    values: Vec<f64>,
+    width: usize,
+}
+
+impl Rows {
+    fn new(width: usize) -> Self {
+        Self { values: Vec::new(), width }
+    }
+
+    /// The number of rows.
+    pub fn len(&self) -> usize {
+        self.values.len().checked_div(self.width).unwrap_or(0)
+    }
+
+    /// Whether nothing is recorded.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// Row `k`, if there is one.
+    pub fn get(&self, k: usize) -> Option<&[f64]> {
+        self.values.get(k * self.width..(k + 1) * self.width)
+    }
+
+    /// The last row, if any.
+    pub fn last(&self) -> Option<&[f64]> {
+        self.len().checked_sub(1).and_then(|k| self.get(k))
+    }
+
+    /// The rows in order.
+    pub fn iter(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.values.chunks_exact(self.width.max(1))
+    }
+
+    /// The rows as one vector each.
+    pub fn to_vecs(&self) -> Vec<Vec<f64>> {
+        self.iter().map(<[f64]>::to_vec).collect()
+    }
+
+    /// Makes room for `rows` more rows, up to [`RESERVE_VALUES`] values in all: a longer
+    /// recording grows as it goes.
+    fn reserve(&mut self, rows: usize) {
+        let wanted = rows.saturating_mul(self.width).min(RESERVE_VALUES.saturating_sub(self.values.len()));
+        self.values.reserve(wanted);
+    }
+
+    fn clear(&mut self) {
+        self.values.clear();
+    }
+}
+
+impl std::ops::Index<usize> for Rows {
+    type Output = [f64];
+    fn index(&self, k: usize) -> &[f64] {
+        self.get(k).unwrap_or_else(|| panic!("row {k} of {}", self.len()))
+    }
+}
+
+impl<'a> IntoIterator for &'a Rows {
+    type Item = &'a [f64];
+    type IntoIter = std::slice::ChunksExact<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
 /// The recorded variables and their rows.
 pub(crate) struct Recorder {
     names: Vec<String>,
     recorded: Vec<(usize, u32, BaseType)>,
-    pub rows: Vec<Vec<f64>>,
+    pub rows: Rows,
     /// Per row, the String columns' values in column order.
     pub texts: Vec<Vec<String>>,
     /// Record every k-th communication point.
@@ -28,7 +101,25 @@ pub(crate) struct Recorder {
 impl Recorder {
     /// Records `recorded` (unit, value reference, type) under `names`.
     pub fn new(names: Vec<String>, recorded: Vec<(usize, u32, BaseType)>) -> Self {
-        Self { names, recorded, rows: Vec::new(), texts: Vec::new(), every: 1 }
+        let width = recorded.len() + 1;
+        Self { names, recorded, rows: Rows::new(width), texts: Vec::new(), every: 1 }
+    }
+
+    /// Makes room for `rows` more rows, so that recording them allocates nothing (unless a
+    /// String variable is recorded).
+    pub fn reserve(&mut self, rows: usize) {
+        if !self.recorded.is_empty() {
+            self.rows.reserve(rows);
+            self.texts.reserve(rows.min(RESERVE_VALUES / self.rows.width));
+        }
+    }
+
+    /// Takes the rows out as one vector each, leaving none.
+    pub fn take(&mut self) -> Vec<Vec<f64>> {
+        let rows = self.rows.to_vecs();
+        self.rows.clear();
+        self.texts.clear();
+        rows
     }
 
     /// "time", then the recorded variables.
@@ -46,9 +137,9 @@ impl Recorder {
         if self.recorded.is_empty() {
             return Ok(());
         }
-        let mut row = Vec::with_capacity(self.recorded.len() + 1);
+        let start = self.rows.values.len();
         let mut texts = Vec::new();
-        row.push(time);
+        self.rows.values.push(time);
         for &(u, vr, base) in &self.recorded {
             let unit = &mut units[u];
             let mark = capture::mark();
@@ -74,13 +165,17 @@ impl Recorder {
                     })
                 }
             };
-            row.push(v.map_err(|e| {
-                let mut x = unit.fail(e, mark, Some(time));
-                x.message += " (recording)";
-                x
-            })?);
+            match v {
+                Ok(v) => self.rows.values.push(v),
+                Err(e) => {
+                    // A row is whole or absent.
+                    self.rows.values.truncate(start);
+                    let mut x = unit.fail(e, mark, Some(time));
+                    x.message += " (recording)";
+                    return Err(x);
+                }
+            }
         }
-        self.rows.push(row);
         self.texts.push(texts);
         Ok(())
     }

@@ -38,7 +38,7 @@ use crate::capture;
 use crate::error::{DiscardedStep, MasterError};
 use crate::interface::Variability;
 use crate::interface::{BaseType, Causality};
-use crate::recording::Recorder;
+use crate::recording::{Recorder, Rows};
 use crate::schedule::Schedule;
 use crate::spec::{Algorithm, EventSpec, OnDiscard, Value};
 use crate::system::{check_value, split_name, System};
@@ -546,6 +546,10 @@ impl Simulation {
     /// unless [`OnDiscard::Error`] makes it an error; a raised interrupt flag ends it at the
     /// next communication point.
     pub fn run_until(&mut self, stop: f64) -> Result<RunEnd, MasterError> {
+        let span = ((stop - self.time) / self.step).ceil();
+        if span.is_finite() && span > 0.0 {
+            self.reserve_steps(span.min(u32::MAX as f64) as usize);
+        }
         loop {
             let remaining = stop - self.time;
             if remaining <= STEP_TOLERANCE * self.step {
@@ -686,7 +690,7 @@ impl Simulation {
 
     /// The recorded rows (time first). Integer, Boolean (0 or 1) and enumeration values are
     /// exact in an f64; a String column holds NaN here and its text in [`Self::texts`].
-    pub fn rows(&self) -> &[Vec<f64>] {
+    pub fn rows(&self) -> &Rows {
         &self.recorder.rows
     }
 
@@ -697,8 +701,13 @@ impl Simulation {
 
     /// Takes the recorded rows out, leaving none.
     pub fn take_rows(&mut self) -> Vec<Vec<f64>> {
-        self.recorder.texts.clear();
-        std::mem::take(&mut self.recorder.rows)
+        self.recorder.take()
+    }
+
+    /// Makes room to record `steps` more communication steps, so that stepping through them
+    /// allocates nothing ([`Self::run_until`] makes room for its span itself).
+    pub fn reserve_steps(&mut self, steps: usize) {
+        self.recorder.reserve(steps.div_ceil(self.recorder.every.max(1) as usize) + 1);
     }
 
     /// The system being simulated.

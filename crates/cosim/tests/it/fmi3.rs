@@ -157,7 +157,7 @@ fn a_unit_that_takes_its_last_step_and_asks_to_end_ends_the_run_after_that_step(
             let RunEnd::EndRequested { unit, time } = end else { panic!("{first:?}/{second:?}: expected an end request, got {end:?}") };
             assert_eq!(unit, "a");
             assert!((time - 8.8).abs() < 1e-9, "ended at {time}");
-            let last = sim.rows().last().unwrap().clone();
+            let last = sim.rows().last().unwrap().to_vec();
             assert_eq!((last[1], last[2]), (88.0, 88.0), "{first:?}/{second:?} {algorithm:?}: both units took the last step");
             assert!((last[0] - 8.8).abs() < 1e-9 && (last[3] - 8.8).abs() < 1e-12, "{last:?}");
             assert!(sim.notices().iter().any(|n| n.contains("unit 'a' completed the step to t = 8.8") && n.contains("asks to end")));

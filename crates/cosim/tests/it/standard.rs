@@ -50,7 +50,7 @@ fn a_discarded_step_ends_the_run_at_the_last_point_every_unit_completed() {
     assert!(status.last_successful_time.is_some_and(|t| (t - 8.8).abs() < 1e-9), "{status:?}");
     assert!(log.iter().any(|l| l.contains("the counter stops at 8.8 s")), "the FMU's reason is quoted: {log:?}");
     // The rows end at 8.8 s, consistent across units: 88 steps counted, the hold one step behind.
-    let last = sim.rows().last().unwrap().clone();
+    let last = sim.rows().last().unwrap().to_vec();
     assert!((last[0] - 8.8).abs() < 1e-9 && last[1] == 88.0 && (last[2] - 8.8).abs() < 1e-9, "{last:?}");
     // Gauss–Seidel: the hold steps after the counter, with the counter's output at the new point.
     assert!((last[3] - 8.8).abs() < 1e-9, "{last:?}");
@@ -269,7 +269,7 @@ fn gauss_seidel_passes_new_values_through_feedthrough_chains_before_the_next_uni
     let mut sim = s.initialize(0.0, 0.25, Algorithm::GaussSeidel, &names(&["hold.y"])).unwrap();
     assert_eq!(sim.step_order(), ["clock", "hold", "t", "c"]);
     assert_eq!(sim.run_until(2.0).unwrap(), RunEnd::Completed);
-    for row in &sim.rows()[1..] {
+    for row in sim.rows().iter().skip(1) {
         assert_eq!(row[1], 4.0 * row[0], "at t = {}", row[0]);
     }
 }
