@@ -17,10 +17,11 @@ pub mod results;
 pub mod settings;
 pub mod tracking;
 
+use neurarm_nn::parallel::{ParallelFor, Pool};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 use anyhow::{bail, Context, Result};
@@ -244,8 +245,8 @@ pub fn export_nn_compensator(
     Ok(path.to_path_buf())
 }
 
-/// Runs `tasks` on `threads` workers; results come back in task order. `done` is called
-/// after each task.
+/// Runs `tasks` on `threads` threads (the nets' pool, [`Pool::scoped`]); results come back in
+/// task order. `done` is called after each task; after a failure no further task starts.
 pub fn parallel<T: Send, R: Send>(
     tasks: Vec<T>,
     threads: usize,
@@ -253,23 +254,20 @@ pub fn parallel<T: Send, R: Send>(
     done: impl Fn() + Sync,
 ) -> Result<Vec<R>> {
     let n = tasks.len();
-    let queue: Mutex<Vec<(usize, T)>> = Mutex::new(tasks.into_iter().enumerate().rev().collect());
+    let tasks: Vec<Mutex<Option<T>>> = tasks.into_iter().map(|t| Mutex::new(Some(t))).collect();
     let results: Mutex<Vec<Option<Result<R>>>> = Mutex::new((0..n).map(|_| None).collect());
-    let next = AtomicUsize::new(0);
-    std::thread::scope(|s| {
-        for _ in 0..threads.max(1).min(n.max(1)) {
-            s.spawn(|| loop {
-                let Some((i, task)) = queue.lock().expect("queue").pop() else { break };
-                let r = work(task);
-                let failed = r.is_err();
-                results.lock().expect("results")[i] = Some(r);
-                next.fetch_add(1, Ordering::Relaxed);
-                done();
-                if failed {
-                    queue.lock().expect("queue").clear();
-                }
-            });
-        }
+    let failed = AtomicBool::new(false);
+    Pool::scoped(threads.max(1).min(n.max(1)), |pool| {
+        pool.run(n, &|i| {
+            if failed.load(Ordering::Relaxed) {
+                return;
+            }
+            let task = tasks[i].lock().expect("task").take().expect("each task runs once");
+            let r = work(task);
+            failed.fetch_or(r.is_err(), Ordering::Relaxed);
+            results.lock().expect("results")[i] = Some(r);
+            done();
+        });
     });
     let results = results.into_inner().expect("results");
     let mut out = Vec::with_capacity(n);
@@ -490,6 +488,25 @@ mod tests {
     use super::*;
     use neurarm_physics::config::ArmConfig;
     use neurarm_physics::control::ReferencePlacement;
+
+    #[test]
+    fn parallel_keeps_task_order_and_stops_at_a_failure() {
+        for threads in [1, 3] {
+            let done = std::sync::atomic::AtomicUsize::new(0);
+            let squares = parallel(
+                (0..20u64).collect(),
+                threads,
+                |i| Ok(i * i),
+                || {
+                    done.fetch_add(1, Ordering::Relaxed);
+                },
+            );
+            assert_eq!(squares.unwrap(), (0..20u64).map(|i| i * i).collect::<Vec<_>>(), "{threads} threads");
+            assert_eq!(done.load(Ordering::Relaxed), 20);
+            let failed = parallel((0..20u64).collect(), threads, |i| if i == 5 { bail!("task {i} failed") } else { Ok(i) }, || {});
+            assert_eq!(failed.unwrap_err().to_string(), "task 5 failed", "{threads} threads: the first failure in task order");
+        }
+    }
 
     #[test]
     fn arms_of_more_than_four_joints_get_as_many_sampled_poses_as_the_four_joint_grid() {
