@@ -174,35 +174,13 @@ pub use neurarm_physics::control::holds::GRAVITY_HOLD_RAD_S;
 /// Length of a pass at its first attempt [s].
 const PASS_S: f64 = 0.4;
 
-/// Moves the arm (base turned 90°) through `points` in order: a smooth rest-to-rest move to
-/// just below each point, then every joint slowly up through it and back down at
-/// `SWEEP_SPEED`; at the middle of each pass the measured angles and commanded torques are
-/// averaged over ±20 ms, and the up and down results are averaged. The inertia term is zero
-/// at constant speed.
-///
-/// Averaging cancels friction that is odd in the velocity, f(−v) = −f(v). Friction that
-/// differs with the direction (the paper's Fig. 7) leaves (f(v) + f(−v))/2 in every pair,
-/// largest against gravity on the light outer joints. So, with `correction` given, each
-/// pass's torque first has the identified friction taken out (`correction[i]`, the interpolant
-/// of joint i's pairs from the friction experiment, at the measured speed); what remains after
-/// averaging is the even part of the pairs' error, not of the friction. The pairs, not the
-/// nets: a net's fitting error near the sweep speed left 0.04 N·m in every pair of the 3-joint
-/// example's base joint, the pairs 0.004 N·m. The Coriolis and centrifugal torques are even in
-/// the velocity too and do not cancel either (up to 0.01 N·m at this speed, 1 % of the
-/// 3-joint example's outer gravity torque); they are taken out as computed from the nominal
-/// rigid-body model at the measured angles and speeds, the model the hold already uses (a 20 %
-/// error in its inertias would leave a fifth of them). `correction` may be empty: then only
-/// the velocity terms are taken out (for an arm whose friction is known to be symmetric).
-/// Without `correction` both pair sets are the plain average.
-///
-/// The joints are held on the moves by an inertia-scaled PD, τ = Ĥ(q)(q̈_d + K_d ė + K_p e) +
-/// Ĉ(q, q̇)q̇ with K_p = ω², K_d = 2ω (critically damped at ω = [`GRAVITY_HOLD_RAD_S`] in every
-/// pose; [`gravity_hold_torques_into`]), computed here from the nominal rigid-body `model`
-/// *without gravity* (that is what is being identified) and passed to the joint controller's
-/// `tau_comp` input, its own gains at 0. A diagonal PD cannot do this: tuned for the lightest
-/// pose it is underdamped in the heavy ones and its oscillation put errors of up to 7 N·m into
-/// the pairs. The speed is 0.25 rad/s: Coriolis and centrifugal torques grow with its square
-/// and do not cancel between passes.
+/// Moves the arm (base turned 90°) to just below each of `points` [rad] in turn, then every joint
+/// up through it and back down at `SWEEP_SPEED`; a pair is the mean of the two passes' angles and
+/// commanded torques over ±20 ms at each middle, in which friction odd in the speed cancels.
+/// With `correction` each pass first loses the model's Coriolis and centrifugal torques and the
+/// friction of the given curves (none if empty); `pairs_uncorrected` are the plain means. The
+/// joints are held by [`gravity_hold_torques_into`] at [`GRAVITY_HOLD_RAD_S`] through `tau_comp`
+/// (docs/decisions/0005-gravity-sweep.md).
 pub fn gravity_sweep(
     arm_fmu: &Path,
     controller: &Path,
