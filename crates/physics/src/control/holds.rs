@@ -9,9 +9,8 @@ use nalgebra::DMatrix;
 use crate::arm::{inverse_dynamics_rnea_into, ArmData, ArmParams};
 
 /// Bandwidth of the friction runs' rigid hold of the joints not driven [rad/s]: K_p = 400 1/s²,
-/// K_d = 40 1/s. At 40 rad/s the noise of the measured angles and speeds made the held joints
-/// jitter, and their friction was measured as the driven joint's (+0.2 N·m on the emulated
-/// 6-joint arm; at 20 rad/s, 0.04 N·m).
+/// K_d = 40 1/s. Higher bandwidths let sensor noise jitter the held joints, whose friction then
+/// adds to the driven joint's (docs/decisions/0006-friction-hold.md).
 pub const FRICTION_HOLD_RAD_S: f64 = 20.0;
 
 /// Bandwidth of the gravity sweep's computed-torque hold [rad/s]: critically damped at it in
@@ -31,11 +30,9 @@ pub fn friction_hold_accelerations_into(q: &[f64], qd: &[f64], u: &mut [f64]) {
 /// τ_h = S u_h + c_h for the held joints h, with `h` the rigid-body mass matrix H [kg·m²],
 /// `c` the Coriolis and centrifugal torques [N·m], `u` the hold's accelerations [rad/s²]
 /// ([`friction_hold_accelerations_into`]; its `driven` entry is set to 0 here) and
-/// S = H_hh − H_hf H_fh / H_ff the held joints' inertia while the driven joint f moves freely.
-/// Then S q̈_h = S u_h − H_hf q̈_f: the held joints settle exactly once the driven one runs at
-/// constant speed, in every pose. The driven joint's entry is left to the caller (its own
-/// torque replaces it). With H_hh in place of S, i.e. assuming q̈_f = 0, the loop's real gain
-/// was up to 50 × the designed one and sensor noise made it diverge.
+/// S = H_hh − H_hf H_fh / H_ff the held joints' inertia while the driven joint f moves freely,
+/// so they settle exactly once it runs at constant speed (docs/decisions/0006-friction-hold.md).
+/// The driven joint's entry is left to the caller (its own torque replaces it).
 pub fn friction_hold_torques_into(h: &DMatrix<f64>, c: &[f64], u: &mut [f64], driven: usize, tau: &mut [f64]) {
     let n = u.len();
     u[driven] = 0.0;
