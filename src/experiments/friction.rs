@@ -23,14 +23,11 @@ pub enum FrictionHold {
     /// The joint controller's PD, inertia-scaled ([`hold_gains`]): the coupling torques of
     /// the driven joint bend the held ones at speed, and the pairs with them.
     Pd,
-    /// Computed torque from the nominal rigid-body model without gravity, τ_h = S u_h + c_h for
-    /// the held joints h: u_h = −K_d q̇_h − K_p q_h (K_p = ω², K_d = 2ω, critically damped at
-    /// ω = [`FRICTION_HOLD_RAD_S`](neurarm_physics::control::holds::FRICTION_HOLD_RAD_S)), c the
-    /// Coriolis and centrifugal torques, and S = H_hh − H_hf H_fh / H_ff the held joints'
-    /// inertia while the driven joint f moves freely
-    /// ([`friction_hold_torques_into`]).
-    /// Then S q̈_h = S u_h − H_hf q̈_f: the held joints settle exactly once the driven one runs
-    /// at constant speed, in every pose, so the coupling no longer bends the measurement.
+    /// Computed torque from the nominal rigid-body model without gravity
+    /// ([`friction_hold_torques_into`], critically damped at
+    /// [`FRICTION_HOLD_RAD_S`](neurarm_physics::control::holds::FRICTION_HOLD_RAD_S)), with the
+    /// held joints' inertia taken while the driven one moves freely: they settle exactly once
+    /// it runs at constant speed, in every pose (docs/decisions/0006-friction-hold.md).
     Rigid,
 }
 
@@ -394,24 +391,12 @@ fn climb_torque_levels(
     }
 }
 
-/// The speed-held levels of the rigid hold, kept in `run`.
-///
-/// Below the first moving level's speed constant torques cannot hold the joint: where
-/// friction falls with speed (Stribeck) the steady state is unstable, so the first level
-/// that moves jumps to where friction rises again (0.3–0.7 rad/s on a Stribeck joint) and
-/// leaves a gap the net would bridge blindly. The rigid hold fills it with speed-controlled
-/// levels: computed torque on every joint from the rigid-body model, the driven joint's
-/// acceleration u_f = ω (q̇_d − q̇_f) plus the first moving level's torque τ_1 as feedforward,
-/// so its torque is τ_1 + H_ff u_f + (coupling), a P loop of gain ω H_ff on its speed; each
-/// level settles for 0.5 s and is then averaged over 1 s. A steady state of any P loop is a
-/// point of the friction curve, so the pair is the level's mean speed and mean torque. The
-/// loop holds a speed only where its gain beats the fall of friction with speed, so ω starts
-/// at 40 rad/s and is raised (160, 640) until the level stays within half a bin width of
-/// its target (so the mid-bin lowest levels keep bins of their own), or else the closest
-/// within half its target is kept (a light distal joint held none within the bin); a
-/// stiffer loop first would put its gain × the speed noise into the torque of every level.
-/// (With constant-torque holds instead of computed torque on all joints, the speed loop and
-/// the holds fought and diverged.)
+/// The rigid hold's speed-held levels, kept in `run`: where constant torques cannot hold a
+/// speed (a Stribeck dip), the driven joint runs a P loop on its speed around the planned
+/// feedforward torque, and a steady state of it is a point of the friction curve. Each level
+/// tries the bandwidths [`SPEED_LOOP_RAD_S`] in turn and keeps the first within half a bin
+/// width of its target, else the closest within half its target, else none
+/// (docs/decisions/0002-friction-speed-levels.md).
 fn speed_held_levels(
     rig: &mut FrictionRig,
     moving_levels: &[(f64, f64)],
@@ -474,12 +459,10 @@ fn speed_level_plan(moving_levels: &[(f64, f64)], settings: &Settings) -> Vec<(f
 
 /// The speeds [rad/s, magnitudes] of the rigid hold's speed-controlled levels below the first
 /// moving level at `first` [rad/s], for friction bins `bin_width` [rad/s] wide: down from it by
-/// `spacing` [rad/s] while at least 3.5 bin widths, then 2.5, 1.5 and 0.5 widths (0.125, 0.075
-/// and 0.025 rad/s for the paper's bins), each unless `first` lies in the same bin.
-///
-/// The lowest three are taken whatever the spaced ones left, since they sit where a Stribeck
-/// dip bends; they lie mid-bin, and the spaced ones stop a bin above them so that no two levels
-/// share a bin (docs/decisions/0002-friction-speed-levels.md).
+/// `spacing` [rad/s] while at least 3.5 bin widths, then 2.5, 1.5 and 0.5 widths, each unless
+/// `first` lies in the same bin. The lowest three, mid-bin where a Stribeck dip bends, are taken
+/// whatever the spaced ones left; no two levels share a bin
+/// (docs/decisions/0002-friction-speed-levels.md).
 pub fn speed_level_targets(first: f64, spacing: f64, bin_width: f64) -> Vec<f64> {
     let mut targets = Vec::new();
     let mut target = first - spacing;
@@ -523,20 +506,13 @@ pub fn friction_step_width(speed_noise_rad_s: f64) -> f64 {
     LOG_SPEED_SCALE_RAD_S.max(2.0 * speed_noise_rad_s)
 }
 
-/// Trains one friction net (velocity → torque) on binned pairs, the pair at rest among them,
-/// for a joint whose measured speed carries noise of `speed_noise_rad_s` (standard
-/// deviation, [`FrictionIdentification::speed_noise_rad_s`]).
-///
-/// Friction jumps at zero speed, and the pairs say nothing of the gap between the pair at
-/// rest and the lowest moving pair (tens of mrad/s), which a net on the raw speed bridges with
-/// a slope: it reached half the Coulomb level only at 10–50 mrad/s, and a compensator fed
-/// the measured speed gave half the friction to a joint starting to move. Where the lowest
-/// pairs lie well above [`friction_step_width`], the training data get the step: pairs at
-/// ±the width carrying each direction's lowest friction (extrapolated from its two lowest
-/// pairs), and points on the straight line from there to the lowest pair, and the net takes
-/// the speed on a log scale ([`InputEncoding::LogSpeed`]), on which the step is an ordinary
-/// slope. Otherwise (noisy speeds) the net is the paper's, on the raw speed and the pairs
-/// alone.
+/// Trains the friction net (velocity [rad/s] → torque [N·m]) of joint `joint` (from 0) on
+/// binned pairs, the pair at rest among them, for a measured speed with noise
+/// `speed_noise_rad_s` (standard deviation, [`FrictionIdentification::speed_noise_rad_s`]).
+/// Where both directions' lowest pairs lie above twice [`friction_step_width`], the data get
+/// the Coulomb step at that width and the net reads the speed on a log scale
+/// ([`InputEncoding::LogSpeed`]), so friction jumps at zero speed instead of ramping up;
+/// otherwise it is the paper's net on the raw speed (docs/decisions/0007-friction-step.md).
 pub fn train_friction_net(joint: usize, pairs: &[FrictionPair], speed_noise_rad_s: f64, seed: u64) -> Result<WeightsFile> {
     let width = friction_step_width(speed_noise_rad_s);
     let lowest = |direction: f64| pairs.iter().filter(|p| p.0 * direction > 0.0).map(|p| p.0.abs()).fold(f64::INFINITY, f64::min);
