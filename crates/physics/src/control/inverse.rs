@@ -83,16 +83,10 @@ pub const SINGULAR_MARGIN_SHARE: f64 = 0.05;
 /// The task-space law's inverse J# (n×2) of a 2×n Jacobian into `out`: the Moore–Penrose
 /// pseudo-inverse ([`pseudo_inverse_into`], the same numbers) while J's smallest singular value
 /// σ₂ is at least `margin` ε [m/rad], and within ε of a singular pose the damped least-squares
-/// inverse Jᵀ (J Jᵀ + λ² I)⁻¹ with λ² = ε² − σ₂², which shrinks to 0 at σ₂ = ε (so J# is
-/// continuous there) and lifts J Jᵀ's smallest eigenvalue to ε² (so ‖J#‖ ≤ 1/ε: the joint
-/// accelerations stay bounded through a singular pose, where J⁺ grows as 1/σ₂).
-///
-/// Why: the task fixes only the end effector, and a redundant arm's self-motion wanders. In
-/// long runs it carried the 3- and 6-joint example arms into singular poses (σ₂ 0.003 and
-/// 0.03 m/rad), where J⁺ asked for accelerations that threw the joints past 100 rad/s.
-/// u = J# a is the minimiser of ‖J u − a‖² + λ² ‖u‖²: near the singular pose the task
-/// acceleration along the lost direction is followed only partly. Returns false, leaving `out`
-/// meaningless, only when J is not finite.
+/// inverse Jᵀ (J Jᵀ + λ² I)⁻¹ with λ² = ε² − σ₂². J# is continuous at σ₂ = ε and ‖J#‖ ≤ 1/ε, so
+/// the joint accelerations stay bounded where a redundant arm's self-motion reaches a singular
+/// pose (docs/decisions/0008-damped-inverse.md). Returns false, leaving `out` meaningless, only
+/// when J is not finite.
 pub fn damped_inverse_into(
     jac: &DMatrix<f64>,
     margin: f64,
