@@ -376,12 +376,10 @@ impl ArmSimulator {
 
 /// The work one step of [`ArmSimulator::step`] may do, in RK4 sub-steps times joints squared
 /// (a sub-step costs about n² for the mass matrix and the recursions, n³/6 for its
-/// factorisation). It allows a 4-joint arm 25 000 sub-steps (6.25 s of simulated time at the
-/// default 0.25 ms sub-step, thousands of times a co-simulation's usual step), 8 joints 6 250
-/// and 64 joints 97. The longest step allowed returns within a fraction of a second on any arm
-/// (0.01 to 0.16 s for 1 to 64 joints on the 2-core development machine), so a host stays
-/// responsive, and one that asks for an absurd step (1e300 s, or 1 s with a 1 ns sub-step)
-/// gets an error at once instead of a call that never returns.
+/// factorisation): a 4-joint arm may take a step thousands of times a co-simulation's usual one.
+/// The longest step allowed returns within a fraction of a second, so a host stays responsive,
+/// and an absurd step (1e300 s) is an error at once, not a call that never returns
+/// (docs/decisions/0009-step-work-limit.md).
 pub const MAX_STEP_WORK: usize = 400_000;
 
 /// The most RK4 sub-steps one step of an arm of `joints` joints may take ([`MAX_STEP_WORK`]).
