@@ -125,15 +125,13 @@ fn pause(spins: u32) {
     }
 }
 
-/// Worker threads that run the tasks of [`ParallelFor::run`] calls, for as long as a scope
-/// lasts ([`Pool::scoped`]): in training, the epochs' parallel parts. Spawning threads for
-/// every part costs ~70 µs a time on the machines measured, a tenth of an epoch; these workers
-/// instead spin briefly (≈ 0.1–0.3 ms), then sleep, between parts. The calling thread works
-/// too: a pool of `threads` threads has `threads − 1` workers, and with none it runs every
-/// task itself. Tasks are taken in increasing order, each by the first thread free.
-///
-/// One job runs at a time: a [`ParallelFor::run`] called while another is in flight (by one of
-/// its tasks, or by another thread) runs its own tasks on its calling thread.
+/// Worker threads that run the tasks of [`ParallelFor::run`] calls for as long as a scope lasts
+/// ([`Pool::scoped`]), spinning briefly and then sleeping between calls, since spawning threads
+/// for every part of an epoch costs too much (docs/decisions/0010-worker-pool.md). A pool of
+/// `threads` threads has `threads − 1` workers plus the caller; tasks are taken in increasing
+/// order, each by the first thread free. One job runs at a time: a [`ParallelFor::run`] called
+/// while another is in flight (by one of its tasks, or by another thread) runs its own tasks on
+/// its calling thread.
 pub struct Pool {
     /// Held by the caller whose job is in flight.
     caller: Mutex<()>,
