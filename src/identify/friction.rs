@@ -12,14 +12,10 @@ use super::RobotLog;
 
 /// How levels are judged and binned. [`FrictionOptions::default`] gives the documented values.
 ///
-/// **Steady.** Over the measuring window (the last `window_s` of a level) a straight line
-/// v(t) = a + s·t is fitted to the joint's speed. The level is steady when its drift |s|·window
-/// is at most `drift_rad_s` plus three standard errors of that drift, the latter capped at
-/// `drift_rad_s` (so sensor noise alone rarely rejects a level, and never lets a decelerating
-/// one through), and the RMS of the speed about the line (its spread) is at most
-/// `spread_rad_s` or 10 % of the mean speed, whichever is larger (stick–slip and oscillation
-/// have a large spread). A level at rest (|mean speed| below `rest_speed_rad_s`) is a
-/// breakaway probe, not a pair.
+/// A level is steady when the line fitted to its speed over the last `window_s` drifts by at
+/// most `drift_rad_s` plus three standard errors (capped at `drift_rad_s`), and the speed's
+/// spread about it is at most `spread_rad_s` or 10 % of the mean speed; a level below
+/// `rest_speed_rad_s` is a breakaway probe, not a pair (docs/concepts/identification.md).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FrictionOptions {
     /// Width of the speed bins [rad/s] (the paper: 0.05).
@@ -287,16 +283,11 @@ pub fn judge_level(level: &Level<'_>, options: &FrictionOptions) -> LevelReport 
 
 /// Judges every level, bins the kept ones and adds the pair at rest.
 ///
-/// Each kept level enters its bin (of width `bin_width_rad_s`, edges at whole multiples of the
-/// width) at its window's mean speed and friction, weighted by its samples; a bin's pair is the
-/// weighted mean. Binning the samples one by one instead would bias each bin's speed towards
-/// its edges by the noise of the speed samples (the bin's torque stays the level's), an error
-/// of slope × bias that is largest where friction changes fastest (the Stribeck dip).
-///
-/// The pair at rest is (0, midpoint of the largest torque of each direction that left the
-/// joint at rest while no smaller torque of that direction moved it): at rest friction takes
-/// any value between the two breakaway torques, and the midpoint is the compensation that
-/// pushes neither way. It needs probes of both directions.
+/// A kept level enters its bin (width `bin_width_rad_s`, edges at its multiples) whole, at its
+/// window's mean speed and friction weighted by its samples, so speed noise does not bias bins
+/// towards their edges. The pair at rest is (0, the midpoint of each direction's largest torque
+/// that left the joint at rest with no smaller one moving it), which pushes neither way; it
+/// needs probes of both directions (docs/concepts/identification.md).
 pub fn identify_levels(levels: &[Level<'_>], options: &FrictionOptions) -> FrictionIdentification {
     let reports: Vec<LevelReport> = levels.iter().map(|l| judge_level(l, options)).collect();
     let mut bins: BTreeMap<i64, (f64, f64, usize)> = BTreeMap::new();

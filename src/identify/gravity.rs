@@ -11,15 +11,10 @@ use neurarm_physics::arm::{inverse_dynamics_rnea_into, ArmData, ArmParams};
 
 /// How passes are found and judged. [`GravityOptions::default`] gives the documented values.
 ///
-/// **Steady.** A pass is steady when, throughout its measuring window, every joint's speed
-/// averaged over `smoothing_s` stays within `share` of the pass speed in the pass's direction
-/// (a joint that sticks and slips, or a controller that has not caught up, fails it). In a log,
-/// a pass is a stretch of at least `min_pass_s` in which every joint's smoothed speed is so
-/// close to +speed (up) or −speed (down). An up pass and a down pass that go through common
-/// angles (their ranges of every joint's angle overlap) make a pair, the nearest in time; the
-/// pose is the middle of the overlap, and each pass's window is centred where that pass comes
-/// closest to it (within `pose_tolerance_rad`), so both measure the same angles. A pose passed
-/// in one direction only is refused.
+/// A pass is steady when every joint's speed, averaged over `smoothing_s`, stays within `share`
+/// of ±`speed_rad_s` throughout its window. An up and a down pass through common angles make a
+/// pair, each measured where it comes closest to the overlap's middle (within
+/// `pose_tolerance_rad`); a pose passed one way only is refused (docs/concepts/identification.md).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct GravityOptions {
     /// Speed of every joint in a pass [rad/s] (the plan's: 0.25).
