@@ -30,14 +30,11 @@ struct Cli {
 enum Command {
     /// Simulate the arm from an initial state under a torque table and write its trajectory.
     ///
-    /// The torque CSV has a header with `time` [s, strictly increasing] and `tau_1` … `tau_n`
-    /// [N·m]; each row's torque is held until the next row. The output has one row per input
-    /// time: time, q_i [rad], qd_i [rad/s], x, y [m], xd, yd [m/s], tau_i, and q_meas_i,
-    /// qd_meas_i when the configuration adds hardware-like effects.
-    ///
-    /// Given a system file instead (`neurarm simulate system.toml -o out.csv`), runs the
-    /// described co-simulation of FMUs through the master and writes the recorded variables;
-    /// if a unit fails mid-run, the rows recorded so far are written and the error reported.
+    /// Torque CSV: `time` [s, strictly increasing] and `tau_1` … `tau_n` [N·m], each row held
+    /// until the next. Output per input time: time, q_i [rad], qd_i [rad/s], x, y [m], xd, yd
+    /// [m/s], tau_i, and q_meas_i, qd_meas_i with hardware-like effects. Given a system file
+    /// instead (`neurarm simulate system.toml -o out.csv`), runs that co-simulation of FMUs and
+    /// writes the recorded variables (the rows so far, and the error, if a unit fails mid-run).
     Simulate(simulate::SimulateArgs),
     /// Run the paper's experiments end to end through the master and the FMUs, for the built-in
     /// arm or your own of 2 to 8 joints: friction and gravity identification, training, Table 1,

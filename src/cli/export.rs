@@ -48,15 +48,10 @@ pub enum Export {
     /// The NN compensator as an FMU (`NnCompensator`): inputs q_i, qd_i; outputs the friction,
     /// gravity and total compensating torques; Boolean parameters enable each part.
     ///
-    /// With `--ideal`, the ideal compensator instead (`IdealCompensator`): the true friction and
-    /// gravity torques of the arm in `-c` (default: the built-in arm), with the same ports;
-    /// `--friction` and `--gravity`, without files, choose the parts switched on (both if
-    /// neither is given).
-    ///
-    /// With `--adaptive`, the adaptive compensator (`AdaptiveCompensator`): the same nets as
-    /// its start, whose output layers keep learning from the controller's learning signal
-    /// `s_i` (inputs `s_i`; parameters adapt, gain_friction, gain_gravity, leakage,
-    /// bound_friction, bound_gravity).
+    /// `--ideal`: `IdealCompensator`, the true torques of the arm in `-c` (default: built-in);
+    /// `--friction`/`--gravity` without files pick the parts (both if neither). `--adaptive`:
+    /// `AdaptiveCompensator`, whose nets' output layers learn from the controller's signal
+    /// (inputs s_i; parameters adapt, gain_friction, gain_gravity, leakage, bound_*).
     Compensator {
         /// Friction net of each joint (1 input: velocity, 1 output: torque), in joint order;
         /// with `--ideal`, no files: switch the true friction on.
@@ -103,12 +98,10 @@ pub enum Export {
 pub enum Controller {
     /// `TaskSpaceController`: computed torque tracking the paper's curve, placed for the arm.
     ///
-    /// Inputs q_i [rad], qd_i [rad/s], tau_comp_i [N·m]; outputs tau_i [N·m], x_ref, y_ref and
-    /// error_x, error_y [m]. The curve is scaled by the arm's reach R (the sum of its link
-    /// lengths, scale R / 1 m) and centred at (0.45 R, 0.10 R), so it stays between 0.23 R
-    /// and 0.84 R from the first joint; `--centre` and `--scale` override that, and a curve the
-    /// arm cannot reach is refused with the reach it needs. The angle inputs start at the pose
-    /// that puts the end effector at the curve's start.
+    /// Inputs q_i [rad], qd_i [rad/s], tau_comp_i [N·m]; outputs tau_i [N·m], x_ref, y_ref,
+    /// error_x, error_y [m]. The curve is scaled by the arm's reach R (Σ link lengths) and
+    /// centred at (0.45 R, 0.10 R) unless `--centre`/`--scale` say otherwise; one the arm cannot
+    /// reach is refused. The angle inputs start where the end effector is at the curve's start.
     TaskSpace {
         /// Arm configuration (TOML): the controller's model of the arm (its friction is left
         /// to tau_comp); the built-in arm if omitted.

@@ -125,13 +125,11 @@ pub const JOINT_LOOP_MAX_RAD_S: f64 = 125.0;
 pub const JOINT_LOOP_MAX_DAMPING_STEP: f64 = 0.6;
 
 /// Gains (K_p [N·m/rad], K_d [N·m·s/rad]) per joint of the joint-space gravity-compensation
-/// loop on `arm`. With `settings.scale_joint_gains`: `settings.joint_kp`, `joint_kd` times
-/// [`gravity_scale`], so the error gravity leaves uncompensated, and the share the gains
-/// correct, are alike for a light arm and a heavy one; then capped per joint so that no joint
-/// is faster than the built-in arm's fastest, √(K_p/m) ≤ [`JOINT_LOOP_MAX_RAD_S`] and
-/// K_d h/m ≤ [`JOINT_LOOP_MAX_DAMPING_STEP`] with m the joint's [`lightest_inertias`] (the
-/// caps do not bind on the built-in arm, whose gains are 50 and 2 on every joint). Without
-/// scaling the gains are taken as given on every joint.
+/// loop on `arm`: `settings.joint_kp`, `joint_kd` on every joint, or, with
+/// `settings.scale_joint_gains`, those times [`gravity_scale`] (so uncompensated gravity leaves
+/// alike errors on light and heavy arms), capped so no joint is faster than the built-in arm's
+/// fastest: √(K_p/m) ≤ [`JOINT_LOOP_MAX_RAD_S`], K_d h/m ≤ [`JOINT_LOOP_MAX_DAMPING_STEP`] with
+/// m the joint's [`lightest_inertias`] (the caps do not bind on the built-in arm).
 pub fn joint_loop_gains(arm: &ArmParams, settings: &Settings) -> Vec<(f64, f64)> {
     if !settings.scale_joint_gains {
         return vec![(settings.joint_kp, settings.joint_kd); arm.dof()];

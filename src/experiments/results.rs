@@ -41,13 +41,11 @@ impl LawSensitivity {
 
 /// What the real arm's sensors cost its friction compensation, from the
 /// [`DIAGNOSTIC_LOOPS`](super::paper::DIAGNOSTIC_LOOPS); all MSEs from the true positions
-/// [m²], ratios over the uncompensated run of the same sensors.
-///
-/// A compensator reads the measured speed. Where that carries noise of the order of the speeds
-/// at which a joint reverses, a friction law with a step at zero speed switches on the noise,
-/// so even the arm's true law can track worse than no compensation: then real NN/none is
-/// bounded by the sensors, not by the nets. Quiet runs keep the encoders' quantisation and
-/// switch off only the noise (`q_noise_std`, `qd_noise_std` set to 0).
+/// [m²], ratios over the uncompensated run of the same sensors. A compensator reads the measured
+/// speed, and a friction law with a step at zero speed switches on its noise near a reversal, so
+/// even the true law can track worse than none: real NN/none is then bounded by the sensors, not
+/// the nets. Quiet runs keep the encoders' quantisation and switch off only the noise
+/// (`q_noise_std`, `qd_noise_std` at 0).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct SensorLimit {
     /// The real arm's true friction law fed the same measured speed as the NN [m²] (`None` if

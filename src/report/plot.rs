@@ -193,19 +193,13 @@ const PALETTE: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 
-/// Writes a PNG of the panels stacked vertically (or in a grid of `columns`), with one legend.
-///
-/// The figure is 1000 px wide and 320 px tall per row of panels, plus a 44 px band for `title`
-/// when it is not blank and a band for the legend: every named series once, in order of first
-/// appearance, its colour and style as in the panels (unnamed series get colours by position
-/// after the named ones and no legend entry). Panels fill the grid row by row; `columns` of 0 counts as 1 and is capped
-/// at the number of panels. Each axis spans its panel's plottable data with a 5 % margin (constant
-/// data gets a band around its value, no data the range 0–1). The file is always PNG, whatever
-/// `path`'s extension, and is written atomically: rendered to a temporary file in the same folder,
-/// then renamed over `path`, so a failure leaves no partial file.
-///
-/// Errors, each naming `path`: no panels, more than 50 rows, the folder missing or not
-/// writable, no usable font (install Debian's `fonts-dejavu-core`), or a drawing failure.
+/// Writes a PNG of the panels in a grid of `columns` (0 counts as 1), row by row, under `title`
+/// (if not blank) and one legend of the named series, in order of first appearance. Each row is
+/// `ROW_HEIGHT` px tall, the figure `WIDTH` px wide; each axis spans its panel's data with a 5 %
+/// margin. Always PNG, whatever `path`'s extension, written atomically (a temporary file in the
+/// same folder, renamed over `path`), so a failure leaves no partial file. Errors, each naming
+/// `path`: no panels, more than `MAX_ROWS` rows, the folder missing or not writable, no usable
+/// font (install Debian's `fonts-dejavu-core`), or a drawing failure.
 pub fn write_png(path: &Path, title: &str, panels: &[Panel], columns: usize) -> Result<(), PlotError> {
     let named = || path.to_path_buf();
     if panels.is_empty() {

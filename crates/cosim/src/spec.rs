@@ -61,32 +61,10 @@ pub enum Value {
     String(String),
 }
 
-/// A system: FMUs, connections, and how to simulate it.
-///
-/// ```toml
-/// [[fmu]]
-/// name = "arm"
-/// path = "PlanarArm.fmu"          # relative to the system file
-/// parameters = { q0_1 = 0.3 }
-///
-/// [[connection]]
-/// from = "arm.q_*"                # '*' matches the same text on both sides
-/// to = "controller.q_*"
-///
-/// [simulation]
-/// stop = 10.0
-/// step = 0.001
-/// record = ["arm.x", "arm.y"]
-///
-/// [[event]]                       # a step change while running
-/// time = 4.0
-/// set = { "arm.payload_mass" = 0.3 }
-///
-/// [[event]]                       # a ramp: linear from the value at `time` to `set` at `until`
-/// time = 0.0
-/// until = 8.0
-/// set = { "arm.viscous_scale_1" = 0.6 }
-/// ```
+/// A system: FMUs, connections, and how to simulate it, as a system file (TOML) holds it:
+/// `[[fmu]]` (name, path relative to the file, parameters), `[[connection]]` (from → to, a `*`
+/// matching the same text on both sides), `[simulation]` and `[[event]]`. The format with an
+/// example: README.md, "Co-simulation of FMUs".
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SystemSpec {
@@ -103,14 +81,12 @@ pub struct SystemSpec {
     pub event: Vec<EventSpec>,
 }
 
-/// A change of variables while the system runs (`[[event]]` in a system file).
-///
-/// A step change (no `until`) sets each variable to its value at the first communication
-/// point at or after `time`; the steps from there on use it. A ramp (with `until`) moves
-/// each Real variable linearly from the value it has at `time` to the value given, reached at
-/// `until`: at every communication point t in between it is set to the line's value at t.
-/// Only tunable parameters and inputs no connection drives can change; both are checked
-/// before the run starts. Events are applied in time order, and in file order at equal times.
+/// A change of variables while the system runs (`[[event]]` in a system file). A step change
+/// (no `until`) sets each variable at the first communication point at or after `time`; a ramp
+/// (with `until`) sets each Real variable at every communication point t up to `until` to the
+/// line from its value at `time` to the value given. Only tunable parameters and inputs no
+/// connection drives can change (checked before the run); events apply in time order, and in
+/// file order at equal times.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EventSpec {

@@ -62,15 +62,11 @@ impl Variability {
     }
 }
 
-/// A unit, as FMI 2.0 defines one: a name and its relation to the SI base units,
-/// `value in base units = factor · value + offset`, with base units kg^kg · m^m · s^s · A^a ·
-/// K^k · mol^mol · cd^cd · rad^rad. Models declare the units they use; the `UnitDefinitions`
-/// of `modelDescription.xml` list exactly those.
-///
+/// A unit as FMI 2.0 defines one: a name, exponents of the base units kg, m, s, A, K, mol, cd,
+/// rad, and `base value = factor · value + offset`; `UnitDefinitions` lists those a model uses.
 /// ```
-/// use neurarm_fmi_export::description::Unit;
-/// // N·m = kg·m²·s⁻²
-/// const NEWTON_METRE: Unit = Unit::new("N.m").kg(1).m(2).s(-2);
+/// # use neurarm_fmi_export::description::Unit;
+/// const NEWTON_METRE: Unit = Unit::new("N.m").kg(1).m(2).s(-2); // kg·m²·s⁻²
 /// assert_eq!(NEWTON_METRE.exponents(), [1, 2, -2, 0, 0, 0, 0, 0]);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -37,12 +37,9 @@ const CHOLESKY_PIECE: usize = 128;
 /// upper triangle read) into the upper triangle of `u` (its lower triangle is left
 /// meaningless). Returns false if A + shift·I is not numerically positive definite.
 ///
-/// Left-looking by block rows of `CHOLESKY_BLOCK` (32): block row K is A's rows minus
-/// U[..K, K]ᵀ U[..K, K..], one GEMM over all finished rows (matrixmultiply, so it runs at
-/// GEMM speed rather than at the axpy speed of an unblocked factorisation), then the block's
-/// own triangle is factored and its columns right of it solved. The column pieces of each
-/// block row are tasks for `par`; each element is computed by the same operations whatever
-/// thread runs it, so the factor does not depend on `par`.
+/// Left-looking by block rows, each updated by one GEMM over the finished rows (GEMM speed, not
+/// axpy speed), in column pieces run as tasks on `par`. Every element is computed by the same
+/// operations whatever thread runs it, so the factor does not depend on `par`.
 pub fn cholesky_shifted(a: &[f64], shift: f64, u: &mut [f64], m: usize, par: &dyn ParallelFor) -> bool {
     assert!(a.len() >= m * m && u.len() >= m * m);
     let u = SharedSlice::new(&mut u[..m * m]);

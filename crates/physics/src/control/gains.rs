@@ -14,23 +14,18 @@ pub struct TaskSpaceGains {
     /// Stiffness of the self-motion towards a rest pose [1/s²] (used when the
     /// [`TaskSpaceData`](super::TaskSpaceData) has one,
     /// [`TaskSpaceData::set_rest_pose`](super::TaskSpaceData::set_rest_pose)): the null-space
-    /// term becomes (I − J⁺J)(k_s (q_rest − q) − k q̇). Damping alone leaves the self-motion free to drift
-    /// (a small torque error moves the pose along the task's null space); the stiffness gives
-    /// every point of the task one pose to return to. Default 0 (damping only): on arms with
-    /// high joint friction a stiffness lets the redundant joints come to rest and stick, and
-    /// the tracking error grows (docs/decisions/0001-null-space-damping.md).
+    /// term becomes (I − J⁺J)(k_s (q_rest − q) − k q̇), giving every point of the task one pose to
+    /// return to. Default 0: with high joint friction it lets the redundant joints come to rest
+    /// and stick (docs/decisions/0001-null-space-damping.md).
     #[serde(default)]
     pub null_stiffness: f64,
 }
 
-/// The default null-space damping of [`TaskSpaceGains`] [1/s].
-///
-/// Friction a compensator gets wrong acts on the self-motion of a redundant arm, which the
-/// task does not see; only this damping holds it, and it decides which joints stop and stick.
-/// No value suits every arm: more damping calms some arms' self-motion and unsettles others',
-/// and the perfectly compensated arm tracks worse the harder it is damped
-/// (docs/decisions/0001-null-space-damping.md). `neurarm paper --tracking-gains kp,kd,k` sets
-/// it.
+/// The default null-space damping of [`TaskSpaceGains`] [1/s]. Only this damping holds the
+/// self-motion of a redundant arm, on which a compensator's friction error acts unseen by the
+/// task. No value suits every arm, and the perfectly compensated arm tracks worse the harder it
+/// is damped (docs/decisions/0001-null-space-damping.md); `neurarm paper --tracking-gains
+/// kp,kd,k` sets it.
 pub const DEFAULT_NULL_DAMPING: f64 = 10.0;
 
 impl Default for TaskSpaceGains {

@@ -72,18 +72,13 @@ pub enum PlacementError {
 }
 
 impl ReferencePlacement {
-    /// The rule for an arm of reach R = Σ lᵢ: scale R / 1 m and centre (0.45 R, 0.10 R). The
-    /// paper's curve then stays between 0.23 R and 0.84 R from the first joint, inside the
-    /// workspace and away from the stretched (singular) pose; for the default 1 m arm it is the
-    /// paper's size around (0.45, 0.10) m.
-    ///
-    /// An arm whose longest link is longer than the others together cannot reach a disc of
-    /// radius `hole` = 2 l_max − R around its first joint; where that disc cuts into the curve
-    /// (the default would be refused by [`ReferencePlacement::check`]), the curve is fitted
-    /// into the ring the arm does reach, with the same margins as the default leaves in a
-    /// whole disc: centred on the same bearing, 23 % of the ring's width from its inner edge
-    /// and 16 % from its outer one, and shrunk until it fits ([`ReferencePlacement::fitted`]
-    /// says so).
+    /// The rule for an arm of reach R = Σ lᵢ: scale R / 1 m and centre (0.45 R, 0.10 R), so the
+    /// curve stays between 0.23 R and 0.84 R from the first joint, inside the workspace and away
+    /// from the stretched (singular) pose; for the default 1 m arm it is the paper's. An arm whose
+    /// longest link exceeds the others together cannot reach within 2 l_max − R of its first
+    /// joint; where that hole cuts into the curve, the curve is centred on the same bearing in the
+    /// ring the arm reaches, 23 % of its width from the inner edge and 16 % from the outer one,
+    /// and shrunk until it fits ([`ReferencePlacement::fitted`] says so).
     pub fn for_arm(arm: &ArmParams) -> Self {
         let reach: f64 = arm.links.iter().map(|l| l.length_m).sum();
         let default = Self { centre: Vector2::new(0.45 * reach, 0.10 * reach), scale: reach };
