@@ -6,7 +6,7 @@ use std::io::Cursor;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 
-use crate::description::{write_unit_definitions, Causality, DefaultExperiment, Unit, Variable, LOG_CATEGORIES};
+use crate::description::{write_unit_definitions, Causality, DefaultExperiment, ModelDescription, Unit, Variable, LOG_CATEGORIES};
 
 const IN_MEMORY: &str = "writing XML to memory cannot fail";
 
@@ -50,6 +50,35 @@ impl Xml {
             self.empty(BytesStart::new("Category").with_attributes([("name", c.name), ("description", description.as_str())]));
         }
         self.end("LogCategories");
+    }
+
+    /// `TypeDefinitions` of `d`'s enumeration types (nothing for none): per type an element
+    /// `named` carrying its name, holding its `Item`s directly or inside an element `inner`.
+    pub(crate) fn type_definitions(&mut self, d: &ModelDescription, named: &str, inner: Option<&str>) {
+        let enumerations = d.enumeration_types();
+        if enumerations.is_empty() {
+            return;
+        }
+        self.start(BytesStart::new("TypeDefinitions"));
+        for t in enumerations {
+            self.start(BytesStart::new(named).with_attributes([("name", t.name.as_str())]));
+            if let Some(inner) = inner {
+                self.start(BytesStart::new(inner));
+            }
+            for item in &t.items {
+                let value = item.value.to_string();
+                self.empty(BytesStart::new("Item").with_attributes([
+                    ("name", item.name.as_str()),
+                    ("value", value.as_str()),
+                    ("description", item.description.as_str()),
+                ]));
+            }
+            if let Some(inner) = inner {
+                self.end(inner);
+            }
+            self.end(named);
+        }
+        self.end("TypeDefinitions");
     }
 
     /// `DefaultExperiment`, if the model declares one.

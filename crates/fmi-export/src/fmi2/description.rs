@@ -26,37 +26,13 @@ pub(crate) fn to_xml_with_guid(d: &ModelDescription, guid: &str) -> String {
         ("canNotUseMemoryManagementFunctions", "true"),
     ]));
     x.unit_definitions(&d.units());
-    type_definitions(&mut x, d);
+    x.type_definitions(d, "SimpleType", Some("Enumeration"));
     x.log_categories(str::to_owned);
     x.default_experiment(d.default_experiment.as_ref());
     model_variables(&mut x, d);
     model_structure(&mut x, d);
     x.end("fmiModelDescription");
     x.finish()
-}
-
-/// `TypeDefinitions`: a `SimpleType` per enumeration type, none without.
-fn type_definitions(x: &mut Xml, d: &ModelDescription) {
-    let enumerations = d.enumeration_types();
-    if enumerations.is_empty() {
-        return;
-    }
-    x.start(BytesStart::new("TypeDefinitions"));
-    for t in enumerations {
-        x.start(BytesStart::new("SimpleType").with_attributes([("name", t.name.as_str())]));
-        x.start(BytesStart::new("Enumeration"));
-        for item in &t.items {
-            let value = item.value.to_string();
-            x.empty(BytesStart::new("Item").with_attributes([
-                ("name", item.name.as_str()),
-                ("value", value.as_str()),
-                ("description", item.description.as_str()),
-            ]));
-        }
-        x.end("Enumeration");
-        x.end("SimpleType");
-    }
-    x.end("TypeDefinitions");
 }
 
 /// `ModelVariables`: a `ScalarVariable` per variable, with its type element.

@@ -120,35 +120,13 @@ pub fn to_xml(d: &ModelDescription) -> String {
         ("hasEventMode", "false"),
     ]));
     x.unit_definitions(&d.units());
-    type_definitions(&mut x, d);
+    x.type_definitions(d, "EnumerationType", None);
     x.log_categories(|description| description.replace("fmi2", "fmi3"));
     x.default_experiment(d.default_experiment.as_ref());
     model_variables(&mut x, d);
     model_structure(&mut x, d);
     x.end("fmiModelDescription");
     x.finish()
-}
-
-/// `TypeDefinitions`: an `EnumerationType` per enumeration type, none without.
-fn type_definitions(x: &mut Xml, d: &ModelDescription) {
-    let enumerations = d.enumeration_types();
-    if enumerations.is_empty() {
-        return;
-    }
-    x.start(BytesStart::new("TypeDefinitions"));
-    for t in enumerations {
-        x.start(BytesStart::new("EnumerationType").with_attributes([("name", t.name.as_str())]));
-        for item in &t.items {
-            let value = item.value.to_string();
-            x.empty(BytesStart::new("Item").with_attributes([
-                ("name", item.name.as_str()),
-                ("value", value.as_str()),
-                ("description", item.description.as_str()),
-            ]));
-        }
-        x.end("EnumerationType");
-    }
-    x.end("TypeDefinitions");
 }
 
 /// `ModelVariables`: an element of the variable's FMI 3.0 type per variable.
